@@ -1,0 +1,10 @@
+"""spectral_igl: Laplacian spectral kernels and distances on 3D shapes.
+
+Spectrum-free evaluation of φ(B⁻¹L)f by polynomial and rational approximation of
+the filter φ, with a certified error bound, on triangle meshes, tetrahedral
+meshes, point clouds, voxel grids and graphs.
+"""
+from ._version import __version__
+from .laplacian import Laplacian, dense_eigs, eigs, laplacian, make_laplacian
+
+__all__ = ["__version__", "Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs"]

@@ -1,0 +1,86 @@
+"""Sparse direct factorizations: the one primitive every solve in the package uses.
+
+``factorize(A)`` returns an object with ``.solve(b)`` for ``b`` of shape (n,) or (n, k).
+Real symmetric positive definite matrices go to CHOLMOD (through cholespy) by
+default, to MKL PARDISO (pypardiso) when asked, and to SuperLU as the fallback;
+complex matrices always go to SuperLU.
+"""
+from __future__ import annotations
+
+import importlib.util
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["factorize", "available_backends", "Factor"]
+
+
+def available_backends() -> list[str]:
+    """Backends importable here, best first."""
+    out = []
+    if importlib.util.find_spec("cholespy") is not None:
+        out.append("cholespy")
+    if importlib.util.find_spec("pypardiso") is not None:
+        out.append("pypardiso")
+    out.append("superlu")
+    return out
+
+
+class Factor:
+    """A factorized sparse matrix. ``solve(b)`` solves ``A x = b``."""
+
+    def __init__(self, A: sp.spmatrix, backend: str = "auto", spd: bool = True):
+        A = sp.csr_matrix(A)
+        n = A.shape[0]
+        if A.shape != (n, n):
+            raise ValueError(f"matrix to factorize must be square, got shape {A.shape}")
+        self.n = n
+        self.dtype = np.complex128 if np.iscomplexobj(A.data) else np.float64
+        if backend == "auto":
+            backend = "cholespy" if (spd and self.dtype == np.float64
+                                     and "cholespy" in available_backends()) else "superlu"
+        if backend not in ("cholespy", "pypardiso", "superlu"):
+            raise ValueError(f"backend must be 'auto', 'cholespy', 'pypardiso' or 'superlu', got {backend!r}")
+        if backend != "superlu" and self.dtype != np.float64:
+            backend = "superlu"
+        self.backend = backend
+        if backend == "cholespy":
+            from cholespy import CholeskySolverD, MatrixType
+
+            A = A.tocsr()
+            A.sort_indices()
+            self._chol = CholeskySolverD(n, A.indptr.astype(np.int32), A.indices.astype(np.int32),
+                                         A.data.astype(np.float64), MatrixType.CSR)
+        elif backend == "pypardiso":
+            import pypardiso
+
+            self._pardiso = pypardiso.PyPardisoSolver(mtype=11)
+            self._A = A.tocsr()
+            self._pardiso.factorize(self._A)
+        else:
+            self._lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A" if spd else "COLAMD")
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """Solve ``A x = b`` for b of shape (n,) or (n, k)."""
+        b = np.asarray(b)
+        if b.shape[0] != self.n:
+            raise ValueError(f"right-hand side must have {self.n} rows, got shape {b.shape}")
+        if np.iscomplexobj(b) and self.dtype == np.float64:
+            return self.solve(b.real) + 1j * self.solve(b.imag)
+        if self.backend == "cholespy":
+            b = np.ascontiguousarray(b, dtype=np.float64)
+            x = np.empty_like(b)
+            self._chol.solve(b, x)
+            return x
+        if self.backend == "pypardiso":
+            x = self._pardiso.solve(self._A, np.ascontiguousarray(b, dtype=np.float64))
+            return x.reshape(b.shape)
+        return self._lu.solve(np.asarray(b, dtype=np.result_type(b, self.dtype)))
+
+    __call__ = solve
+
+
+def factorize(A: sp.spmatrix, backend: str = "auto", spd: bool = True) -> Factor:
+    """Factorize a sparse square matrix; see :class:`Factor`."""
+    return Factor(A, backend=backend, spd=spd)

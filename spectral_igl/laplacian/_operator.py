@@ -1,0 +1,130 @@
+"""The :class:`Laplacian` pair (L, B) that every later stage takes."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.csgraph as csgraph
+
+__all__ = ["Laplacian", "make_laplacian"]
+
+
+@dataclass(eq=False)
+class Laplacian:
+    r"""A discrete Laplacian as a stiffness/mass pair.
+
+    The Laplace--Beltrami operator is :math:`\tilde L = B^{-1} L`, self-adjoint in
+    the inner product :math:`\langle f, g\rangle_B = f^\top B g`.
+
+    Attributes
+    ----------
+    L : (n, n) scipy.sparse.csr_matrix, float64
+        Stiffness matrix: symmetric positive *semi*-definite, every row sums to 0.
+    B : (n, n) scipy.sparse.csr_matrix, float64
+        Mass matrix: symmetric positive definite.
+    domain : str
+        ``"triangle"``, ``"tet"``, ``"points"``, ``"voxels"`` or ``"graph"``.
+    data : dict
+        What the domain was built from (``V``, ``F``/``T``, ``P``, ``mask``...), so that
+        later stages (gradients, pictures) can get at the geometry.
+    components : (n,) int
+        Connected component label of each vertex (graph of the nonzeros of L).
+    n_components : int
+    cache : dict
+        Factorizations and spectral bounds computed by later stages, reused across calls.
+        Never stale: L and B are not to be modified after construction.
+    """
+
+    L: sp.csr_matrix
+    B: sp.csr_matrix
+    domain: str = "matrix"
+    data: dict = field(default_factory=dict)
+    components: np.ndarray = None
+    n_components: int = 0
+    cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def n(self) -> int:
+        """Number of vertices (rows of L and B)."""
+        return self.L.shape[0]
+
+    @property
+    def lumped(self) -> bool:
+        """True when B is diagonal."""
+        return self.B.nnz == self.n and np.all(self.B.indices == np.arange(self.n))
+
+    @property
+    def mass(self) -> np.ndarray:
+        """(n,) row sums of B: the lumped mass of each vertex."""
+        return np.asarray(self.B.sum(axis=1)).ravel()
+
+    def component_basis(self) -> sp.csr_matrix:
+        r"""(n, c) sparse basis of ker L: one B-normalised indicator per component.
+
+        Columns :math:`z_c = 1_c / \sqrt{1_c^\top B 1_c}`, so :math:`Z^\top B Z = I`.
+        """
+        if "component_basis" not in self.cache:
+            n, c = self.n, self.n_components
+            Z = sp.csr_matrix((np.ones(n), (np.arange(n), self.components)), shape=(n, c))
+            area = np.asarray((Z.T @ (self.B @ Z)).diagonal()).ravel()
+            self.cache["component_basis"] = (Z @ sp.diags(1.0 / np.sqrt(area))).tocsr()
+        return self.cache["component_basis"]
+
+    def project_out_kernel(self, f: np.ndarray) -> np.ndarray:
+        r"""Remove from ``f`` its B-orthogonal projection onto ker L (constants per component).
+
+        Returns :math:`f - Z Z^\top B f`. Used by singular filters (pseudo-inverses).
+        """
+        Z = self.component_basis()
+        return f - Z @ (Z.T @ (self.B @ f))
+
+    def area(self) -> float:
+        """Total measure (area, volume, or mass) ``1ᵀ B 1``."""
+        return float(self.B.sum())
+
+    def __repr__(self) -> str:
+        return (
+            f"Laplacian(domain={self.domain!r}, n={self.n}, nnz(L)={self.L.nnz}, "
+            f"components={self.n_components}, lumped={self.lumped})"
+        )
+
+
+def _symmetrize(A: sp.spmatrix) -> sp.csr_matrix:
+    A = sp.csr_matrix(A, dtype=np.float64)
+    A = ((A + A.T) * 0.5).tocsr()
+    A.sum_duplicates()
+    A.eliminate_zeros()
+    A.sort_indices()
+    return A
+
+
+def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
+                   adjacency: sp.spmatrix | None = None) -> Laplacian:
+    """Build a :class:`Laplacian` from a stiffness ``L`` (PSD) and a mass ``B`` (SPD).
+
+    ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0.
+    This is the one place where every constructor's matrices are normalised.
+    Components come from ``adjacency`` (e.g. the mesh's elements) when given, else from
+    the nonzero pattern of ``L``; a cotangent weight that happens to be exactly zero
+    must not split a connected mesh.
+    """
+    L = _symmetrize(L)
+    n = L.shape[0]
+    if L.shape != (n, n):
+        raise ValueError(f"L must be square, got shape {L.shape}")
+    off = L - sp.diags(L.diagonal())
+    L = (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
+    L.sort_indices()
+    B = _symmetrize(B)
+    if B.shape != (n, n):
+        raise ValueError(f"B must have shape {(n, n)}, got {B.shape}")
+    if not (np.all(np.isfinite(L.data)) and np.all(np.isfinite(B.data))):
+        raise ValueError("L or B contains NaN or inf")
+    if np.any(B.diagonal() <= 0):
+        raise ValueError(f"B must be positive definite; {int(np.sum(B.diagonal() <= 0))} diagonal entries are <= 0")
+    pattern = L if adjacency is None else sp.csr_matrix(adjacency)
+    pattern = sp.csr_matrix((np.ones(pattern.nnz), pattern.indices, pattern.indptr), shape=L.shape)
+    nc, labels = csgraph.connected_components(pattern, directed=False)
+    return Laplacian(L=L, B=B, domain=domain, data=dict(data or {}),
+                     components=labels.astype(np.int64), n_components=int(nc))
