@@ -134,6 +134,8 @@ class Viewer:
         if not np.isfinite(t) or t <= 0:
             raise ValueError(f"t must be a positive number, got {t!r}")
         self.t = t
+        if self.slider is None:
+            return self.update()
         rep = self.slider.GetRepresentation()
         lo, hi = rep.GetMinimumValue(), rep.GetMaximumValue()
         logt = float(np.log10(t))
@@ -142,6 +144,10 @@ class Viewer:
             rep.SetMaximumValue(max(hi, logt))
         rep.SetValue(logt)
         return self.update()
+
+    def _on_slider(self, value):
+        if self.slider is not None and abs(10.0 ** value - self.t) > 1e-12 * self.t:
+            self.on_time(10.0 ** value)
 
     def set_filter(self, name):
         """Choose the filter by name (see :data:`FILTERS`) and redraw."""
@@ -217,7 +223,8 @@ class Viewer:
                                    show_point=False, use_picker=False, left_clicking=False)
         except TypeError:  # older pyvista
             p.enable_point_picking(callback=self.on_pick_point, show_message=False)
-        self.slider = p.add_slider_widget(lambda v: self.on_time(10.0 ** v), rng=self._t_range,
+        self.slider = None
+        self.slider = p.add_slider_widget(self._on_slider, rng=self._t_range,
                             value=float(np.log10(self.t)), title="log10 t", fmt="%.2f",
                             pointa=(0.6, 0.92), pointb=(0.95, 0.92), color="black")
         p.add_key_event("f", lambda: self.set_filter(_next(list(FILTERS), self.filter)))
