@@ -44,7 +44,10 @@ def _critical_sets(critical):
     for key, idx in items:
         if key not in alias:
             raise ValueError(f"unknown critical point kind {key!r}; use minimum, maximum or saddle")
-        out[alias[key]] = np.asarray(idx, dtype=np.int64).ravel()
+        idx = np.asarray(idx, dtype=np.int64)
+        if idx.ndim == 2:  # (index, multiplicity) rows, as for saddles
+            idx = idx[:, 0]
+        out[alias[key]] = idx.ravel()
     return out
 
 
