@@ -170,3 +170,47 @@ def biharmonic_distance(lap, i, method="auto", tol=1e-8):
     import spectral_igl as sig
 
     return np.asarray(sig.biharmonic_distance(lap, i, method=method, tol=tol), dtype=float)
+
+
+# ---- perturbations for the robustness figures ------------------------------------------
+def vertex_normals(V, F):
+    import igl
+
+    return igl.per_vertex_normals(V, F)
+
+
+def add_noise(V, F, amount, seed=0):
+    """Move each vertex along its normal by Gaussian noise of ``amount`` x mean edge length."""
+    rng = np.random.default_rng(seed)
+    h = float(np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)))
+    return V + amount * h * rng.standard_normal(len(V))[:, None] * vertex_normals(V, F)
+
+
+def cut_holes(V, F, centers, radius):
+    """Remove the faces within ``radius`` of the vertices ``centers``; drop unused vertices.
+
+    Returns ``V2, F2, index`` with ``index[i]`` the new index of old vertex ``i`` (-1 if removed).
+    """
+    bary = V[F].mean(axis=1)
+    keep = np.ones(len(F), dtype=bool)
+    for c in np.atleast_1d(centers):
+        keep &= np.linalg.norm(bary - V[c], axis=1) > radius
+    F2 = F[keep]
+    used = np.unique(F2)
+    index = -np.ones(len(V), dtype=np.int64)
+    index[used] = np.arange(used.size)
+    return V[used], index[F2], index
+
+
+def sphere_biharmonic_distance(theta, lmax=3000):
+    r"""Biharmonic distance on the unit sphere at angle ``theta`` (analytic series).
+
+    .. math:: d^2(\theta) = \sum_{l \ge 1} \frac{2l+1}{4\pi} \frac{2(1 - P_l(\cos\theta))}{(l(l+1))^2}
+    """
+    from scipy.special import eval_legendre
+
+    x = np.cos(np.asarray(theta, dtype=float))
+    d2 = np.zeros_like(x)
+    for l in range(1, lmax + 1):
+        d2 += (2 * l + 1) / (4 * np.pi) * 2 * (1 - eval_legendre(l, x)) / (l * (l + 1.0)) ** 2
+    return np.sqrt(np.maximum(d2, 0))
