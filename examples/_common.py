@@ -207,10 +207,10 @@ def sphere_biharmonic_distance(theta, lmax=3000):
 
     .. math:: d^2(\theta) = \sum_{l \ge 1} \frac{2l+1}{4\pi} \frac{2(1 - P_l(\cos\theta))}{(l(l+1))^2}
     """
-    from scipy.special import eval_legendre
-
     x = np.cos(np.asarray(theta, dtype=float))
     d2 = np.zeros_like(x)
+    p_prev, p = np.ones_like(x), x.copy()  # P_0, P_1; Bonnet's recurrence for the rest
     for l in range(1, lmax + 1):
-        d2 += (2 * l + 1) / (4 * np.pi) * 2 * (1 - eval_legendre(l, x)) / (l * (l + 1.0)) ** 2
+        d2 += (2 * l + 1) / (4 * np.pi) * 2 * (1 - p) / (l * (l + 1.0)) ** 2
+        p_prev, p = p, ((2 * l + 1) * x * p - l * p_prev) / (l + 1)
     return np.sqrt(np.maximum(d2, 0))
