@@ -497,9 +497,7 @@ def _job_figures(args):
         argv += ["--mesh", args.mesh] if args.mesh else []
         try:
             spec.loader.exec_module(mod)
-            result = mod.main(argv)
-            _say(args, f"{p.stem}: " + ", ".join(f"{k}={_fmt(v)}" for k, v in (result or {}).items()
-                                                 if not isinstance(v, (list, dict, np.ndarray))))
+            mod.main(argv)  # prints its own summary
         except Exception as err:  # report and go on with the other figures
             failed.append(p.stem)
             print(f"{p.stem}: failed: {type(err).__name__}: {err}", file=sys.stderr)
@@ -510,12 +508,6 @@ def _job_figures(args):
         return EXIT_ERROR
     _say(args, f"wrote the figures of {len(scripts)} script(s) to {args.out}")
     return EXIT_OK
-
-
-def _fmt(v):
-    if isinstance(v, float):
-        return f"{v:.3g}"
-    return str(v)
 
 
 _JOBS = {"kernel": _job_kernel_distance, "distance": _job_kernel_distance, "hks": _job_hks,

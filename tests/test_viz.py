@@ -267,3 +267,19 @@ def test_viewer_filter_method_quantity(viewer):
     with pytest.raises(ValueError):
         viewer.on_pick(lap.n)
     assert viewer.filter == "biharmonic" and viewer.source == 5
+
+
+def test_separate_scales_stay_separate(sphere):
+    V, F = sphere
+    f1, f2 = V[:, 0], 100 * V[:, 1]
+    p = plot_levelsets([(V, F), (V, F)], [f1, f2], shared_scale=False, off_screen=True,
+                       window_size=(300, 150))
+    ranges = []
+    for r in p.renderers:
+        for a in r.actors.values():
+            m = getattr(a, "mapper", None)
+            if m is not None and m.dataset is not None and m.dataset.n_cells == len(F):
+                ranges.append(tuple(m.scalar_range))
+    p.close()
+    assert ranges[0] == pytest.approx((f1.min(), f1.max()))
+    assert ranges[1] == pytest.approx((f2.min(), f2.max()))

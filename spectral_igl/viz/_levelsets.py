@@ -180,7 +180,9 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         iso = levelset_values(lo, hi, n_levels)
         mesh = mesh.copy()
         mesh.point_data["f"] = fi
-        sb = dict(title=" ", color="black", n_labels=3, fmt="%.3g", vertical=False,
+        # pyvista links mappers whose scalar bars share a title: one title per colour scale
+        bar_title = " " if (shared_scale or clim is not None) else " " * (j + 1)
+        sb = dict(title=bar_title, color="black", n_labels=3, fmt="%.3g", vertical=False,
                   width=0.6, position_x=0.2, position_y=0.03, label_font_size=12)
         show_bar = bool(scalar_bar and (j == ncol - 1 or not (shared_scale or clim is not None)))
         common = dict(scalars="f", cmap=cmap, clim=(lo, hi), show_scalar_bar=show_bar,
