@@ -8,3 +8,10 @@ from ._version import __version__
 from .laplacian import Laplacian, dense_eigs, eigs, laplacian, make_laplacian
 
 __all__ = ["__version__", "Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs"]
+
+# --- constructors ---
+from .laplacian import (anisotropic_laplacian, graph_laplacian, point_cloud_laplacian,  # noqa: E402
+                        tetrahedralize, voxel_laplacian)
+
+__all__ += ["point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
+            "graph_laplacian", "tetrahedralize"]
