@@ -15,3 +15,10 @@ from .approx import SpectralOperator, apply_filter, lambda_max  # noqa: E402
 
 __all__ += ["filters", "solvers", "apply_filter", "SpectralOperator", "lambda_max"]
 # --- end engine ---
+
+# --- constructors ---
+from .laplacian import (anisotropic_laplacian, graph_laplacian, point_cloud_laplacian,  # noqa: E402
+                        tetrahedralize, voxel_laplacian)
+
+__all__ += ["point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
+            "graph_laplacian", "tetrahedralize"]
