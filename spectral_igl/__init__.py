@@ -8,3 +8,27 @@ from ._version import __version__
 from .laplacian import Laplacian, dense_eigs, eigs, laplacian, make_laplacian
 
 __all__ = ["__version__", "Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs"]
+
+# --- kernels and distances ---
+from ._diagonal import distance_colouring, kernel_diagonal  # noqa: E402
+from .descriptors import auto_diffusion_function, eccentricity, hks, spectral_descriptor, wks  # noqa: E402
+from .distances import (  # noqa: E402
+    biharmonic_distance,
+    commute_time_distance,
+    diffusion_distance,
+    mexican_hat_distance,
+    pairwise_spectral_distance,
+    polyharmonic_distance,
+    spectral_distance,
+    wave_distance,
+)
+from .embedding import spectral_embedding  # noqa: E402
+from .kernels import heat_kernel, spectral_kernel  # noqa: E402
+
+__all__ += [
+    "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
+    "spectral_distance", "pairwise_spectral_distance", "diffusion_distance",
+    "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
+    "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
+    "eccentricity", "spectral_embedding",
+]
