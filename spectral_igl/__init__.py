@@ -9,6 +9,13 @@ from .laplacian import Laplacian, dense_eigs, eigs, laplacian, make_laplacian
 
 __all__ = ["__version__", "Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs"]
 
+# --- engine ---
+from . import filters, solvers  # noqa: E402
+from .approx import SpectralOperator, apply_filter, lambda_max  # noqa: E402
+
+__all__ += ["filters", "solvers", "apply_filter", "SpectralOperator", "lambda_max"]
+# --- end engine ---
+
 # --- kernels and distances ---
 from ._diagonal import distance_colouring, kernel_diagonal  # noqa: E402
 from .descriptors import auto_diffusion_function, eccentricity, hks, spectral_descriptor, wks  # noqa: E402
