@@ -64,7 +64,7 @@ def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.nda
 
 def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", method: str = "auto",
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
-                      distance: int | None = None, return_info: bool = False):
+                      distance: int | None = None, samples: int = 16, return_info: bool = False):
     r"""Spectral distance from ``source`` to ``targets`` (one, many, or all vertices).
 
     .. math:: d(i, j) = \|\varphi(\tilde L) B^{-1}(e_i - e_j)\|_B
@@ -87,7 +87,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         How :math:`G_{jj}` is obtained for one-to-all (see
         :func:`spectral_igl.kernel_diagonal`). ``"eigen"`` returns the classical
         truncated-eigenpair distance with ``k`` pairs (baseline; no error bound).
-    k, distance : parameters of the diagonal estimator.
+    k, distance, samples : parameters of the diagonal estimator.
     return_info : bool
         Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
         distance was recomputed exactly as a norm).
@@ -130,9 +130,10 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     e = np.zeros((n, 1))
     e[s] = 1.0
     col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
-    col_bound = float(np.max(np.atleast_1d(np.asarray(getattr(op2, "error_bound", 0.0), float))))
+    col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
+    col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
-                                  tol=tol, engine_method=method, return_info=True)
+                                  samples=samples, tol=tol, engine_method=method, return_info=True)
     diag = np.real(diag)
     info.update(dinfo)
     d2 = diag[s] + diag - 2.0 * col
@@ -256,11 +257,10 @@ def biharmonic_distance(lap, source, targets=None, **kwargs):
 
 
 def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
-    r"""Poly-harmonic distance of order ``k``: :math:`|\varphi|^2(s) = s^{-k}`.
+    r"""Poly-harmonic distance of integer order ``k``: :math:`|\varphi|^2(s) = s^{-k}`.
 
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
     """
-    k = as_positive(k, "k")
     return spectral_distance(lap, _filters().polyharmonic(k), source, targets, **kwargs)
 
 

@@ -73,7 +73,7 @@ def test_eigen_baseline_converges_to_exact(lap_torus):
     assert np.abs(trunc - exact).max() > 1e-4 * exact.max()  # truncation error is real
 
 
-@pytest.mark.parametrize("t", [1e-4, 1e-3, 1e-2, 1e-1, 1.0])
+@pytest.mark.parametrize("t", [1e-4, 1e-2, 1.0])
 def test_positivity_sweep_with_poor_diagonal(t):
     """A deliberately poor diagonal estimate (distance-1 colouring, no deflation) makes
     G_ii + G_jj - 2 G_ij negative near the source; those targets must be recomputed as
