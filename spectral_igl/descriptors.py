@@ -6,7 +6,7 @@ import numpy as np
 from ._diagonal import kernel_diagonal
 from ._validate import as_positive, describe
 from .kernels import _check_filter, _check_lap, _filters, abs_square, filter_at_zero
-from .laplacian import eigs
+from .laplacian import dense_eigs, eigs
 
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
 
@@ -86,7 +86,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         Band width; default :math:`7\,\delta` with :math:`\delta` the spacing of
         ``energies`` (Aubry's choice), required for a single energy.
     k : int
-        Eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
+        Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
     method : {"eigen", "auto", "exact", "probing", "dense"}
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
         :math:`\psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
@@ -106,8 +106,9 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         sigma = 7.0 * (Ev.max() - Ev.min()) / (Ev.size - 1)
     sigma = as_positive(sigma, "sigma")
     if method == "eigen":
-        lam, X = eigs(lap, min(int(k), lap.n - 1))
         c = lap.n_components
+        kk = c + int(k)
+        lam, X = eigs(lap, kk) if kk < lap.n else dense_eigs(lap)
         lam, X = lam[c:], X[:, c:]
         Psi = np.exp(-((Ev[None, :] - np.log(lam)[:, None]) ** 2) / (2.0 * sigma ** 2))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
