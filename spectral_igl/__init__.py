@@ -22,3 +22,27 @@ from .laplacian import (anisotropic_laplacian, graph_laplacian, point_cloud_lapl
 
 __all__ += ["point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
             "graph_laplacian", "tetrahedralize"]
+
+# --- kernels and distances ---
+from ._diagonal import distance_colouring, kernel_diagonal  # noqa: E402
+from .descriptors import auto_diffusion_function, eccentricity, hks, spectral_descriptor, wks  # noqa: E402
+from .distances import (  # noqa: E402
+    biharmonic_distance,
+    commute_time_distance,
+    diffusion_distance,
+    mexican_hat_distance,
+    pairwise_spectral_distance,
+    polyharmonic_distance,
+    spectral_distance,
+    wave_distance,
+)
+from .embedding import spectral_embedding  # noqa: E402
+from .kernels import heat_kernel, spectral_kernel  # noqa: E402
+
+__all__ += [
+    "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
+    "spectral_distance", "pairwise_spectral_distance", "diffusion_distance",
+    "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
+    "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
+    "eccentricity", "spectral_embedding",
+]
