@@ -18,7 +18,9 @@ def mean_edge_length(V: np.ndarray, C: np.ndarray) -> float:
     """Mean length of the (unique) edges of a triangle or tetrahedral mesh."""
     k = C.shape[1]
     E = np.concatenate([C[:, [a, b]] for a in range(k) for b in range(a + 1, k)])
-    E = np.unique(np.sort(E, axis=1), axis=0)
+    E = np.sort(E, axis=1)
+    key = np.unique(E[:, 0] * np.int64(V.shape[0]) + E[:, 1])
+    E = np.c_[key // V.shape[0], key % V.shape[0]]
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
