@@ -99,3 +99,35 @@ def test_diffusion_smooth_matches_dense():
         expected = X @ (np.exp(-lam * t) * (X.T @ (lap.B @ f)))
         g = diffusion_smooth(lap, f, t)
         assert np.sqrt((g - expected) @ (lap.B @ (g - expected))) < 1e-6 * np.sqrt(f @ (lap.B @ f))
+
+
+def test_optimal_time_beats_a_decade_either_side():
+    pytest.importorskip("spectral_igl.filters")
+    from spectral_igl.applications import diffusion_smooth, optimal_time
+
+    V, F = icosphere(4)
+    lap = sig.laplacian(V, F)
+    clean = V[:, 0] + 0.5 * V[:, 1] * V[:, 2]
+    f = clean + 0.1 * np.random.default_rng(0).standard_normal(lap.n)
+    t, curve = optimal_time(lap, f)
+    assert set(curve) == {"t", "residual", "energy", "curvature"}
+    assert np.all(np.diff(curve["residual"]) > 0) and np.all(np.diff(curve["energy"]) < 0)
+    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
+    e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
+    assert e[1] < e[0] and e[1] < e[2]
+    assert e[1] < 0.5 * err(f)
+
+
+def test_volume_diffusion_smoothing_with_optimal_time():
+    pytest.importorskip("spectral_igl.filters")
+    from data_generators import box_tets
+    from spectral_igl.applications import diffusion_smooth, optimal_time
+
+    V, T = box_tets((8, 8, 8), (1.0, 1.0, 1.0))
+    lap = sig.laplacian(V, T)
+    clean = np.cos(np.pi * V[:, 0]) + 0.5 * np.cos(np.pi * V[:, 1])
+    f = clean + 0.2 * np.random.default_rng(1).standard_normal(lap.n)
+    t, _ = optimal_time(lap, f, n_times=32)
+    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
+    e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
+    assert e[1] < e[0] and e[1] < e[2]
