@@ -32,6 +32,8 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     """
     import numbers
 
+    import numpy as np
+
     from .. import apply_filter, filters
 
     lap = _check_lap(lap)
@@ -41,4 +43,6 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     t = float(t)
     if t == 0.0:
         return h.astype(complex)
+    if t < 0:  # e^{+i|t|L} h is the conjugate of e^{-i|t|L} conj(h): L is real
+        return np.conj(apply_filter(lap, filters.wave(-t), np.conj(h), method=method, tol=tol))
     return apply_filter(lap, filters.wave(t), h, method=method, tol=tol)
