@@ -9,6 +9,13 @@ from .laplacian import Laplacian, dense_eigs, eigs, laplacian, make_laplacian
 
 __all__ = ["__version__", "Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs"]
 
+# --- engine ---
+from . import filters, solvers  # noqa: E402
+from .approx import SpectralOperator, apply_filter, lambda_max  # noqa: E402
+
+__all__ += ["filters", "solvers", "apply_filter", "SpectralOperator", "lambda_max"]
+# --- end engine ---
+
 # --- applications ---
 from .applications import (  # noqa: E402
     CriticalPoints, HeatGeodesics, auto_diffusion, critical_points, diffusion_basis,

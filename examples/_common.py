@@ -1,0 +1,216 @@
+"""Shared pieces of the example scripts: arguments, shapes, truncated spectral references, saving.
+
+Every script ``figNN_*.py`` has ``main(argv=None) -> dict``: it parses ``--mesh``, ``--out``
+and ``--quick``, writes PNGs into ``--out`` and returns its key numbers (and the list of
+``images``) so that the test suite can import it and check them.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run as a plain script from a source checkout
+    sys.path.insert(0, str(ROOT))
+
+
+def parser(doc: str) -> argparse.ArgumentParser:
+    """Argument parser with ``--mesh``, ``--out``, ``--quick``."""
+    p = argparse.ArgumentParser(description=(doc or "").strip().splitlines()[0] if doc else None)
+    p.add_argument("--mesh", help="a triangle mesh file to use instead of the generated shape")
+    p.add_argument("--out", default="figures", help="output directory for the PNGs (default figures/)")
+    p.add_argument("--quick", action="store_true", help="small shapes and few samples (seconds)")
+    return p
+
+
+def out_dir(args) -> Path:
+    d = Path(args.out)
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def blob(level: int = 4):
+    """A smooth genus-0 shape with bumps (a deformed icosphere), so that level sets bend.
+
+    Returns ``V : (n, 3) float``, ``F : (m, 3) int``.
+    """
+    from data_generators import icosphere
+
+    V, F = icosphere(level)
+    x, y, z = V.T
+    r = 1.0 + 0.22 * np.sin(3.0 * x + 0.5) * np.cos(2.0 * y) + 0.18 * z ** 2 - 0.12 * x * y
+    V = V * r[:, None] * np.array([1.4, 1.0, 0.8])
+    return V, F
+
+
+def normalize_area(V, F):
+    """Scale ``V`` so that the surface has unit area."""
+    import igl
+
+    area = float(np.sum(igl.doublearea(V, F))) / 2.0
+    return V / np.sqrt(area)
+
+
+def surface(args, level_quick: int = 3, level_full: int = 4, unit_area: bool = True):
+    """``(V, F, name)``: the ``--mesh`` file, or the generated blob."""
+    if args.mesh:
+        from spectral_igl.io import read_mesh
+
+        V, F = read_mesh(args.mesh)
+        if F.shape[1] != 3:
+            raise SystemExit(f"{args.mesh}: this example needs a triangle mesh")
+        name = Path(args.mesh).stem
+    else:
+        V, F = blob(level_quick if args.quick else level_full)
+        name = "blob"
+    if unit_area:
+        V = normalize_area(V, F)
+    return V, F, name
+
+
+def far_vertex(V, i: int = 0) -> int:
+    """The vertex farthest (in space) from vertex ``i``."""
+    return int(np.argmax(np.linalg.norm(V - V[i], axis=1)))
+
+
+def extreme_vertex(V, axis: int = 0) -> int:
+    """Vertex with the largest coordinate along ``axis`` (a tip of the shape)."""
+    return int(np.argmax(V[:, axis]))
+
+
+# ---- truncated spectral references (what the survey compares against) -----------------
+def kernel_from_eigs(evals, X, phi, i):
+    r"""Truncated :math:`\sum_l \varphi(\lambda_l) x_l(i) x_l` (all columns when ``X`` is complete)."""
+    return X @ (phi(evals) * X[i])
+
+
+def distance_from_eigs(evals, X, phi2, i):
+    r"""Truncated :math:`d(i,\cdot) = (\sum_l \varphi^2(\lambda_l) |x_l(i) - x_l|^2)^{1/2}`."""
+    D = X - X[i]
+    return np.sqrt(np.maximum(D ** 2 @ phi2(evals), 0.0))
+
+
+def singular(fn):
+    """``fn`` with the value 0 on the (numerically) zero eigenvalues: the pseudo-inverse rule."""
+
+    def g(s):
+        s = np.asarray(s, dtype=float)
+        out = np.zeros_like(s)
+        pos = s > 1e-10 * max(1.0, float(np.max(np.abs(s))) if s.size else 1.0)
+        out[pos] = fn(s[pos])
+        return out
+
+    return g
+
+
+# ---- timing and files ----------------------------------------------------------------
+class Timer:
+    def __enter__(self):
+        self.start = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc):
+        self.seconds = time.perf_counter() - self.start
+
+
+def pyplot():
+    from spectral_igl.viz._backend import pyplot as _p
+
+    return _p()
+
+
+def savefig(fig, path, dpi: int = 90):
+    """Save a matplotlib figure as PNG and close it."""
+    plt = pyplot()
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    plt.close(fig)
+    return str(path)
+
+
+def render(path, shape, f, **kwargs):
+    """:func:`spectral_igl.viz.plot_levelsets` to a PNG, returning the path."""
+    from spectral_igl.viz import plot_levelsets
+
+    kwargs.setdefault("window_size", None)
+    plot_levelsets(shape, f, filename=path, **kwargs)
+    return str(path)
+
+
+def summary(name: str, result: dict) -> dict:
+    """Print a one-line summary of the key numbers; return ``result``."""
+    items = [f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}" for k, v in result.items()
+             if k != "images" and not isinstance(v, (list, dict, np.ndarray))]
+    print(f"{name}: " + ", ".join(items))
+    for img in result.get("images", []):
+        print(f"  wrote {img}")
+    return result
+
+
+# ---- the package's distances (one place to call them) ---------------------------------
+def spectral_distance(lap, filt, i, method="auto", tol=1e-8):
+    """Spectrum-free spectral distance ``d(i, :)`` of the filter ``filt``; (n,) float."""
+    import spectral_igl as sig
+
+    return np.asarray(sig.spectral_distance(lap, filt, i, method=method, tol=tol), dtype=float)
+
+
+def diffusion_distance(lap, t, i, method="auto", tol=1e-8):
+    """Spectrum-free diffusion distance at time ``t`` (filter squared e^(-ts)); (n,) float."""
+    import spectral_igl as sig
+
+    return np.asarray(sig.diffusion_distance(lap, t, i, method=method, tol=tol), dtype=float)
+
+
+def biharmonic_distance(lap, i, method="auto", tol=1e-8):
+    """Spectrum-free biharmonic distance (filter squared s^-2); (n,) float."""
+    import spectral_igl as sig
+
+    return np.asarray(sig.biharmonic_distance(lap, i, method=method, tol=tol), dtype=float)
+
+
+# ---- perturbations for the robustness figures ------------------------------------------
+def vertex_normals(V, F):
+    import igl
+
+    return igl.per_vertex_normals(V, F)
+
+
+def add_noise(V, F, amount, seed=0):
+    """Move each vertex along its normal by Gaussian noise of ``amount`` x mean edge length."""
+    rng = np.random.default_rng(seed)
+    h = float(np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)))
+    return V + amount * h * rng.standard_normal(len(V))[:, None] * vertex_normals(V, F)
+
+
+def cut_holes(V, F, centers, radius):
+    """Remove the faces within ``radius`` of the vertices ``centers``; drop unused vertices.
+
+    Returns ``V2, F2, index`` with ``index[i]`` the new index of old vertex ``i`` (-1 if removed).
+    """
+    bary = V[F].mean(axis=1)
+    keep = np.ones(len(F), dtype=bool)
+    for c in np.atleast_1d(centers):
+        keep &= np.linalg.norm(bary - V[c], axis=1) > radius
+    F2 = F[keep]
+    used = np.unique(F2)
+    index = -np.ones(len(V), dtype=np.int64)
+    index[used] = np.arange(used.size)
+    return V[used], index[F2], index
+
+
+def sphere_biharmonic_distance(theta, lmax=3000):
+    r"""Biharmonic distance on the unit sphere at angle ``theta`` (analytic series).
+
+    .. math:: d^2(\theta) = \sum_{l \ge 1} \frac{2l+1}{4\pi} \frac{2(1 - P_l(\cos\theta))}{(l(l+1))^2}
+    """
+    x = np.cos(np.asarray(theta, dtype=float))
+    d2 = np.zeros_like(x)
+    p_prev, p = np.ones_like(x), x.copy()  # P_0, P_1; Bonnet's recurrence for the rest
+    for l in range(1, lmax + 1):
+        d2 += (2 * l + 1) / (4 * np.pi) * 2 * (1 - p) / (l * (l + 1.0)) ** 2
+        p_prev, p = p, ((2 * l + 1) * x * p - l * p_prev) / (l + 1)
+    return np.sqrt(np.maximum(d2, 0))

@@ -1,0 +1,52 @@
+"""Run the figure scripts and copy a selection of their images, compressed, to docs/gallery/.
+
+    python examples/make_gallery.py [--quick] [--out figures/]
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+from pathlib import Path
+
+import _common as C
+
+GALLERY = C.ROOT / "docs" / "gallery"
+PICKS = ["fig02_harmonic_6.png", "fig03_eigenfunction_10.png", "fig08_volumetric_heat_kernel.png",
+         "fig09_distances.png", "fig12_biharmonic_stability.png", "fig13_error_vs_k.png",
+         "fig15_gibbs.png", "fig15_truncated_kernel.png", "fig07_17_time_vs_n.png",
+         "fig24_smoothing.png", "fig10_filters.png", "fig16_accuracy_vs_time.png"]
+MAX_BYTES = 150_000
+
+
+def compress(src, dst):
+    """Copy ``src`` to ``dst``, palette-quantised and downscaled until it is under MAX_BYTES."""
+    from PIL import Image
+
+    shutil.copyfile(src, dst)
+    scale = 1.0
+    while dst.stat().st_size > MAX_BYTES and scale > 0.3:
+        img = Image.open(src).convert("RGB")
+        if scale < 1.0:
+            img = img.resize((int(img.width * scale), int(img.height * scale)), Image.LANCZOS)
+        img.quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(dst, optimize=True)
+        scale *= 0.85
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--out", default="figures")
+    args = p.parse_args(argv)
+    from spectral_igl.cli import main as cli
+
+    cli(["figures", "--out", args.out] + (["--quick"] if args.quick else []))
+    GALLERY.mkdir(parents=True, exist_ok=True)
+    for name in PICKS:
+        src = Path(args.out) / name
+        if src.is_file():
+            compress(src, GALLERY / name)
+            print(f"{GALLERY / name}: {(GALLERY / name).stat().st_size // 1000} KB")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,545 @@
+"""Command line: ``spectral-igl <job> MESH [options]``.
+
+Jobs: ``kernel``, ``distance``, ``hks``, ``smooth``, ``geodesic``, ``view``, ``figures``.
+Meshes: ``.obj``, ``.off``, ``.ply``, ``.stl``, ``.wrl`` (triangles) and MEDIT ``.mesh``
+(tetrahedra); or a generated shape with ``--shape``. Outputs by extension: ``.npy``,
+``.csv``, ``.png`` (``--out`` may be repeated).
+
+Exit codes
+----------
+0 success; 1 the computation failed; 2 bad command line (unknown option, out-of-range
+vertex, unsupported output type); 3 the input file is missing or unreadable;
+4 an optional dependency is missing (e.g. pictures need ``pip install "spectral_igl[viz]"``).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
+
+_FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "commute_time", "biharmonic", "polyharmonic")
+_METHODS = ("auto", "rational", "krylov", "chebyshev", "taylor", "euler", "power", "taylor1",
+            "contour", "eigen", "dense")
+_OUTPUTS = (".npy", ".csv", ".png")
+_SHAPES = ("sphere", "box", "torus", "cylinder")
+
+
+class CLIError(Exception):
+    """An error with the exit code it maps to."""
+
+    def __init__(self, message, code=EXIT_ERROR):
+        super().__init__(message)
+        self.code = code
+
+
+class Progress:
+    """A small text progress bar on stderr (only on a terminal, or when forced)."""
+
+    def __init__(self, total, label="", enabled=None, stream=None, width=28):
+        self.stream = stream or sys.stderr
+        self.enabled = (hasattr(self.stream, "isatty") and self.stream.isatty()) if enabled is None else enabled
+        self.total, self.label, self.width, self.done = max(int(total), 1), label, width, 0
+        self.start = time.perf_counter()
+
+    def step(self, text=""):
+        self.done = min(self.done + 1, self.total)
+        if not self.enabled:
+            return
+        frac = self.done / self.total
+        bar = "#" * int(round(frac * self.width))
+        elapsed = time.perf_counter() - self.start
+        self.stream.write(f"\r{self.label} [{bar:<{self.width}}] {100 * frac:3.0f}% "
+                          f"{elapsed:6.1f}s {text[:40]:<40}")
+        if self.done == self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+# ---- argument parsing -------------------------------------------------------------------
+def _positive(text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not np.isfinite(x) or x <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return x
+
+
+def _nonnegative_int(text):
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a vertex index (integer >= 0), got {text!r}") from None
+    if x < 0:
+        raise argparse.ArgumentTypeError(f"expected a vertex index (integer >= 0), got {text!r}")
+    return x
+
+
+def _input_args(p, outputs=_OUTPUTS):
+    p.add_argument("mesh", nargs="?", metavar="MESH",
+                   help="mesh file: .obj .off .ply .stl .wrl (triangles) or .mesh (tetrahedra)")
+    p.add_argument("--shape", choices=_SHAPES,
+                   help="use a generated shape instead of a file (sphere: unit icosphere, "
+                        "box: tetrahedral box)")
+    p.add_argument("--level", type=int, default=3,
+                   help="resolution of the generated shape (icosphere subdivisions; default 3)")
+    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"),
+                   help="Laplacian weights (default cotan: linear FEM)")
+    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"),
+                   help="mass matrix (default full: linear FEM)")
+    p.add_argument("-o", "--out", action="append", default=[], metavar="FILE",
+                   help=f"write the result; type by extension ({', '.join(outputs)}); repeatable")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.add_argument("--progress", action="store_true",
+                   help="show the progress bar even when stderr is not a terminal")
+
+
+def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area)"):
+    p.add_argument("-s", "--source", type=_nonnegative_int, default=0,
+                   help="source vertex index (default 0)")
+    p.add_argument("-f", "--filter", default=filter_default, choices=_FILTERS, metavar="FILTER",
+                   help=f"spectral filter: {', '.join(_FILTERS)} (default {filter_default})")
+    p.add_argument("-t", "--time", type=_positive, default=None, help=t_help)
+    p.add_argument("--order", type=int, default=3, help="order k of the polyharmonic filter")
+    p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
+                   help=f"approximation method: {', '.join(_METHODS)} (default auto)")
+    p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
+
+
+def build_parser():
+    """The ``argparse`` parser of ``spectral-igl``."""
+    from . import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="spectral-igl",
+        description="Laplacian spectral kernels and distances on 3-D shapes, spectrum-free "
+                    "with a certified error bound.",
+        epilog="examples:\n"
+               "  spectral-igl distance --shape sphere --source 0 --filter biharmonic --out d.png\n"
+               "  spectral-igl kernel bunny.obj --source 10 --filter heat -t 1e-3 --out k.npy\n"
+               "  spectral-igl hks spot.obj --out hks.csv\n"
+               "  spectral-igl figures --quick --out figures/\n"
+               "exit codes: 0 ok, 1 computation failed, 2 bad arguments, 3 bad input file, "
+               "4 missing optional dependency",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="job", metavar="JOB")
+    sub.required = True
+
+    p = sub.add_parser("kernel", help="kernel column K(:, source) = phi(L) B^-1 e_source",
+                       description="Kernel column K(:, i) = phi(B^-1 L) B^-1 e_i of a spectral "
+                                   "filter phi, evaluated spectrum-free.")
+    _input_args(p)
+    _engine_args(p, "heat")
+
+    p = sub.add_parser("distance", help="spectral distance d(source, :) of a filter",
+                       description="Spectral distance from a source vertex: "
+                                   "d(i,j)^2 = ||phi(L~) B^-1 (e_i - e_j)||_B^2. biharmonic: "
+                                   "phi^2 = s^-2; commute_time: phi^2 = s^-1; diffusion: "
+                                   "phi^2 = exp(-t s).")
+    _input_args(p)
+    _engine_args(p, "biharmonic")
+
+    p = sub.add_parser("hks", help="heat kernel signature at several times",
+                       description="Heat kernel signature HKS_t(i) = K_t(i, i) at several times t. "
+                                   "Output (n, number of times); the picture shows the middle time.")
+    _input_args(p)
+    p.add_argument("--times", type=_positive, nargs="+", default=None,
+                   help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
+    p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
+                   help=f"approximation method: {', '.join(_METHODS)} (default auto)")
+    p.add_argument("--tol", type=_positive, default=1e-8)
+
+    p = sub.add_parser("smooth", help="diffusion smoothing of a signal or of the shape itself",
+                       description="Diffusion smoothing f_t = exp(-t L~) f. The signal comes from "
+                                   "--signal (.npy/.csv with one value per vertex, or n x d); "
+                                   "without it the vertex coordinates are smoothed and the "
+                                   "result may be written as a mesh (.obj .off .ply .stl).")
+    _input_args(p, outputs=_OUTPUTS + (".obj", ".off", ".ply", ".stl"))
+    p.add_argument("--signal", metavar="FILE", help="signal to smooth (.npy or .csv)")
+    p.add_argument("--noise", type=float, default=0.0,
+                   help="first add Gaussian noise of this standard deviation (relative to the "
+                        "signal's range) -- for demonstrations")
+    p.add_argument("--seed", type=int, default=0, help="seed of --noise")
+    p.add_argument("-t", "--time", type=_positive, default=None,
+                   help="diffusion time (default: chosen by the L-curve, optimal_time)")
+    p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
+                   help=f"approximation method: {', '.join(_METHODS)} (default auto)")
+    p.add_argument("--tol", type=_positive, default=1e-8)
+
+    p = sub.add_parser("geodesic", help="geodesic distance from a source (heat method or Varadhan)",
+                       description="Approximate geodesic distance from a source vertex.")
+    _input_args(p)
+    p.add_argument("-s", "--source", type=_nonnegative_int, default=0, help="source vertex (default 0)")
+    p.add_argument("--method", default="heat", choices=("heat", "varadhan"),
+                   help="heat method (Crane et al.) or Varadhan's formula (default heat)")
+    p.add_argument("-t", "--time", type=_positive, default=None,
+                   help="diffusion time (default: squared mean edge length)")
+
+    p = sub.add_parser("view", help="interactive viewer: click a vertex to see level sets",
+                       description="Interactive viewer: press p over the surface to pick a vertex; "
+                                   "slider for log10 t; keys f / m / k cycle filter, method, "
+                                   "kernel/distance. With --screenshot it renders once off screen.")
+    _input_args(p, outputs=())
+    _engine_args(p, "biharmonic")
+    p.add_argument("--quantity", default="distance", choices=("distance", "kernel"))
+    p.add_argument("--screenshot", metavar="PNG", help="render off screen to this file and exit")
+
+    p = sub.add_parser("figures", help="run the example scripts that draw the survey's figures",
+                       description="Run the scripts in examples/ (a source checkout) and write "
+                                   "their PNGs to --out.")
+    p.add_argument("-o", "--out", default="figures", help="output directory (default figures/)")
+    p.add_argument("--quick", action="store_true", help="small shapes, fast (seconds per figure)")
+    p.add_argument("--only", nargs="+", metavar="NAME", help="only these scripts (e.g. fig02 fig09)")
+    p.add_argument("--list", action="store_true", help="list the scripts and exit")
+    p.add_argument("--mesh", help="run the scripts on this mesh instead of generated shapes")
+    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--progress", action="store_true")
+    return parser
+
+
+# ---- inputs -----------------------------------------------------------------------------
+def _load_shape(args):
+    """(V, C, name) from the MESH argument or --shape."""
+    if args.mesh is not None and getattr(args, "shape", None):
+        raise CLIError("give either MESH or --shape, not both", EXIT_USAGE)
+    if args.mesh is None and not getattr(args, "shape", None):
+        raise CLIError("no input: give a MESH file or --shape sphere", EXIT_USAGE)
+    if args.mesh is not None:
+        from .io import read_mesh
+
+        try:
+            V, C = read_mesh(args.mesh)
+        except (FileNotFoundError, IsADirectoryError, PermissionError) as err:
+            raise CLIError(f"cannot read {args.mesh}: {err}", EXIT_INPUT) from err
+        except (ValueError, TypeError, RuntimeError, OSError) as err:
+            raise CLIError(f"cannot read {args.mesh}: {err}", EXIT_INPUT) from err
+        return V, C, Path(args.mesh).stem
+    import data_generators as dg
+
+    level = int(args.level)
+    if not 0 <= level <= 7:
+        raise CLIError(f"--level must be between 0 and 7, got {level}", EXIT_USAGE)
+    if args.shape == "sphere":
+        V, F = dg.icosphere(level)
+    elif args.shape == "box":
+        k = 2 + 2 * level
+        V, F = dg.box_tets((k, max(2, (3 * k) // 4), max(2, k // 2)))
+    else:
+        gen = getattr(dg, args.shape, None)
+        if gen is None:
+            raise CLIError(f"--shape {args.shape} is not available in this version", EXIT_USAGE)
+        V, F = gen()
+    return V, F, args.shape
+
+
+def _check_outputs(outs, allowed):
+    for out in outs:
+        ext = Path(out).suffix.lower()
+        if ext not in allowed:
+            raise CLIError(f"cannot write {out!r}: output type must be one of {', '.join(allowed)}",
+                           EXIT_USAGE)
+        parent = Path(out).parent
+        if parent.exists() and not parent.is_dir():
+            raise CLIError(f"cannot write {out!r}: {parent} is not a directory", EXIT_USAGE)
+
+
+def _laplacian(V, C, args):
+    from . import laplacian
+
+    try:
+        return laplacian(V, C, weights=args.weights, mass=args.mass)
+    except ValueError as err:
+        raise CLIError(f"cannot build the Laplacian: {err}", EXIT_INPUT) from err
+
+
+def _default_time(lap):
+    return 1e-2 * float(lap.area()) if lap.domain == "triangle" else 1e-2 * _volume_scale(lap)
+
+
+def _volume_scale(lap):
+    V = lap.data["V"]
+    return float(np.sum((V.max(0) - V.min(0)) ** 2))
+
+
+def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
+    for out in outs:
+        path = Path(out)
+        if path.parent and not path.parent.exists():
+            path.parent.mkdir(parents=True, exist_ok=True)
+        ext = path.suffix.lower()
+        if ext == ".npy":
+            np.save(path, values)
+        elif ext == ".csv":
+            header = ",".join(f"value{j}" for j in range(values.shape[1])) if values.ndim == 2 else "value"
+            np.savetxt(path, values, delimiter=",", header=header, comments="", fmt="%.10g")
+        elif ext == ".png":
+            from .viz import plot_levelsets
+
+            f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
+            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
+        else:
+            from .io import write_mesh
+
+            write_mesh(path, values, C)
+
+
+def _say(args, text):
+    if not args.quiet:
+        print(text)
+
+
+# ---- jobs ---------------------------------------------------------------------------------
+def _job_kernel_distance(args):
+    from .viz._quantity import FILTERS, evaluate
+
+    _check_outputs(args.out, _OUTPUTS)
+    prog = Progress(4, args.job, enabled=(not args.quiet) and (args.progress or None))
+    V, C, name = _load_shape(args)
+    prog.step("read")
+    if args.source >= len(V):
+        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
+                       EXIT_USAGE)
+    lap = _laplacian(V, C, args)
+    prog.step("Laplacian")
+    t = args.time
+    if FILTERS[args.filter] and t is None:
+        t = _default_time(lap)
+    ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
+                  order=args.order)
+    prog.step("evaluated")
+    kind = "distance" if args.job == "distance" else "cyclic"
+    _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
+           title=f"{ev.label} ({name})")
+    prog.step("written")
+    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g}"
+    _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
+               f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; error bound {bound}; "
+               f"{ev.seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
+    return EXIT_OK
+
+
+def _job_hks(args):
+    _check_outputs(args.out, _OUTPUTS)
+    V, C, name = _load_shape(args)
+    lap = _laplacian(V, C, args)
+    times = args.times
+    if times is None:
+        times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
+    from . import hks
+
+    prog = Progress(len(times), "hks", enabled=(not args.quiet) and (args.progress or None))
+    cols = []
+    start = time.perf_counter()
+    for t in times:
+        cols.append(np.asarray(hks(lap, [t], method=args.method, tol=args.tol)).reshape(lap.n, -1)[:, 0])
+        prog.step(f"t={t:.3g}")
+    H = np.column_stack(cols)
+    seconds = time.perf_counter() - start
+    _write(args.out, H, V, C, args, kind="cyclic", title=f"HKS t={times[len(times) // 2]:.3g} ({name})")
+    _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); {seconds:.3g} s"
+               + "".join(f"\nwrote {o}" for o in args.out))
+    return EXIT_OK
+
+
+def _read_signal(path, n):
+    p = Path(path)
+    if not p.is_file():
+        raise CLIError(f"no such signal file: {path}", EXIT_INPUT)
+    try:
+        f = np.load(p) if p.suffix.lower() == ".npy" else np.loadtxt(p, delimiter=",", ndmin=1)
+    except (ValueError, OSError) as err:
+        try:
+            f = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=1)
+        except (ValueError, OSError):
+            raise CLIError(f"cannot read signal {path}: {err}", EXIT_INPUT) from err
+    f = np.asarray(f, dtype=float)
+    if f.shape[0] != n or not np.all(np.isfinite(f)):
+        raise CLIError(f"signal {path} must hold {n} finite values (one per vertex), "
+                       f"got shape {f.shape}", EXIT_INPUT)
+    return f
+
+
+def _job_smooth(args):
+    _check_outputs(args.out, _OUTPUTS + (".obj", ".off", ".ply", ".stl"))
+    V, C, name = _load_shape(args)
+    lap = _laplacian(V, C, args)
+    f = _read_signal(args.signal, len(V)) if args.signal else V.copy()
+    if args.noise:
+        rng = np.random.default_rng(args.seed)
+        span = float(np.ptp(f)) or 1.0
+        f = f + args.noise * span * rng.standard_normal(f.shape)
+    from . import diffusion_smooth
+
+    t = args.time
+    if t is None:
+        from . import optimal_time
+
+        t = optimal_time(lap, f)
+        t = float(t[0] if isinstance(t, tuple) else t)
+    start = time.perf_counter()
+    g = np.asarray(diffusion_smooth(lap, f, t, method=args.method, tol=args.tol))
+    seconds = time.perf_counter() - start
+    geometry = args.signal is None
+    for out in args.out:
+        ext = Path(out).suffix.lower()
+        if ext in (".obj", ".off", ".ply", ".stl") and not geometry:
+            raise CLIError(f"{out}: a mesh can only be written when smoothing the shape itself",
+                           EXIT_USAGE)
+    if geometry:
+        mesh_outs = [o for o in args.out if Path(o).suffix.lower() in (".obj", ".off", ".ply", ".stl")]
+        _write(mesh_outs, g, V, C, args)
+        other = [o for o in args.out if o not in mesh_outs]
+        pics = [o for o in other if o.lower().endswith(".png")]
+        _write([o for o in other if o not in pics], g, V, C, args)
+        for o in pics:  # the smoothed shape, coloured by displacement
+            _write([o], np.linalg.norm(g - V, axis=1), g, C, args, kind="distance",
+                   title=f"smoothed, t={t:.3g} (colour: displacement)")
+    else:
+        _write(args.out, g, V, C, args, kind="cyclic", title=f"smoothed, t={t:.3g}")
+    _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {seconds:.3g} s"
+               + "".join(f"\nwrote {o}" for o in args.out))
+    return EXIT_OK
+
+
+def _job_geodesic(args):
+    _check_outputs(args.out, _OUTPUTS)
+    V, C, name = _load_shape(args)
+    if args.source >= len(V):
+        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
+                       EXIT_USAGE)
+    lap = _laplacian(V, C, args)
+    from . import geodesic_distance
+
+    start = time.perf_counter()
+    d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
+    seconds = time.perf_counter() - start
+    _write(args.out, d, V, C, args, sources=[args.source], kind="distance",
+           title=f"geodesic distance ({args.method}) ({name})")
+    _say(args, f"geodesic distance ({args.method}) from vertex {args.source} on {name} "
+               f"({lap.n} vertices): max {d.max():.6g}; {seconds:.3g} s"
+               + "".join(f"\nwrote {o}" for o in args.out))
+    return EXIT_OK
+
+
+def _job_view(args):
+    from .viz import Viewer
+    from .viz._quantity import FILTERS
+
+    V, C, name = _load_shape(args)
+    if args.source >= len(V):
+        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
+                       EXIT_USAGE)
+    lap = _laplacian(V, C, args)
+    t = args.time if args.time is not None else _default_time(lap)
+    off = args.screenshot is not None
+    viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
+                    source=args.source, tol=args.tol, off_screen=True if off else None)
+    if off:
+        Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
+        viewer.screenshot(args.screenshot)
+        viewer.close()
+        _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
+        return EXIT_OK
+    from .viz._backend import headless
+
+    if headless():
+        raise CLIError("no display available: use --screenshot FILE.png to render off screen",
+                       EXIT_USAGE)
+    viewer.show()
+    return EXIT_OK
+
+
+def examples_dir():
+    """The ``examples/`` directory of a source checkout, or None."""
+    here = Path(__file__).resolve().parents[1] / "examples"
+    env = os.environ.get("SPECTRAL_IGL_EXAMPLES")
+    for d in ([Path(env)] if env else []) + [here, Path.cwd() / "examples"]:
+        if (d / "_common.py").is_file():
+            return d
+    return None
+
+
+def _job_figures(args):
+    import importlib.util
+
+    d = examples_dir()
+    if d is None:
+        raise CLIError("the example scripts were not found: run from a source checkout "
+                       "(or set SPECTRAL_IGL_EXAMPLES to its examples/ directory)", EXIT_ERROR)
+    scripts = sorted(p for p in d.glob("fig*.py"))
+    names = [p.stem for p in scripts]
+    if args.list:
+        print("\n".join(names))
+        return EXIT_OK
+    if args.only:
+        unknown = [n for n in args.only if not any(m == n or m.startswith(n + "_") for m in names)]
+        if unknown:
+            raise CLIError(f"unknown figure script(s) {', '.join(unknown)}; available: "
+                           f"{', '.join(names)}", EXIT_USAGE)
+        scripts = [p for p in scripts if any(p.stem == n or p.stem.startswith(n + "_") for n in args.only)]
+    sys.path.insert(0, str(d))
+    prog = Progress(len(scripts), "figures", enabled=(not args.quiet) and (args.progress or None))
+    failed = []
+    for p in scripts:
+        spec = importlib.util.spec_from_file_location(p.stem, p)
+        mod = importlib.util.module_from_spec(spec)
+        argv = ["--out", str(args.out)] + (["--quick"] if args.quick else [])
+        argv += ["--mesh", args.mesh] if args.mesh else []
+        try:
+            spec.loader.exec_module(mod)
+            mod.main(argv)  # prints its own summary
+        except Exception as err:  # report and go on with the other figures
+            failed.append(p.stem)
+            print(f"{p.stem}: failed: {type(err).__name__}: {err}", file=sys.stderr)
+        prog.step(p.stem)
+    if failed:
+        print(f"{len(failed)} of {len(scripts)} figure script(s) failed: {', '.join(failed)}",
+              file=sys.stderr)
+        return EXIT_ERROR
+    _say(args, f"wrote the figures of {len(scripts)} script(s) to {args.out}")
+    return EXIT_OK
+
+
+_JOBS = {"kernel": _job_kernel_distance, "distance": _job_kernel_distance, "hks": _job_hks,
+         "smooth": _job_smooth, "geodesic": _job_geodesic, "view": _job_view,
+         "figures": _job_figures}
+
+
+def main(argv=None) -> int:
+    """Run ``spectral-igl`` with ``argv`` (default ``sys.argv[1:]``); return the exit code."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return _JOBS[args.job](args)
+    except CLIError as err:
+        print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
+        return err.code
+    except ImportError as err:
+        print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
+        return EXIT_MISSING
+    except (ValueError, TypeError) as err:
+        print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:  # the computation failed: say what, not a traceback
+        print(f"spectral-igl {args.job}: failed: {type(err).__name__}: {err}", file=sys.stderr)
+        return EXIT_ERROR
+
+
+if __name__ == "__main__":
+    sys.exit(main())

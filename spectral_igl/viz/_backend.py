@@ -1,0 +1,140 @@
+"""Lazy access to pyvista/matplotlib, off-screen set-up, colour maps and shape conversion.
+
+Nothing here imports pyvista, vtk or matplotlib at module level: ``import spectral_igl``
+and ``import spectral_igl.viz`` stay light.
+"""
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+
+INSTALL_HINT = 'pip install "spectral_igl[viz]"'
+
+# Colours of the survey: distances go from blue (minimum) to red (maximum); other
+# functions use a cyclic map red -> yellow -> green -> cyan -> blue -> magenta -> red.
+DISTANCE_COLORS = ["#0000ff", "#00ffff", "#00ff00", "#ffff00", "#ff0000"]
+CYCLIC_COLORS = ["#ff0000", "#ffff00", "#00ff00", "#00ffff", "#0000ff", "#ff00ff", "#ff0000"]
+CRITICAL_COLORS = {"minimum": "#1f3cff", "maximum": "#ff2020", "saddle": "#20c020"}
+
+
+def headless() -> bool:
+    """True when no display server is reachable (Linux without ``DISPLAY``/``WAYLAND_DISPLAY``)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    return not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def pyvista():
+    """Import pyvista, choosing an off-screen OpenGL context on a headless Linux machine.
+
+    VTK >= 9.4 wheels carry an EGL render window that needs only the system's libEGL
+    (Mesa software rendering works; no X server, no GPU). On a machine with no display we
+    select it before VTK creates its first window, which also silences VTK's attempt to
+    reach an X server. An explicit ``VTK_DEFAULT_OPENGL_WINDOW`` is respected.
+    """
+    if headless():
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    try:
+        import pyvista as pv
+    except ImportError as err:  # pragma: no cover - depends on the environment
+        raise ImportError(f"spectral_igl.viz needs pyvista for 3-D pictures: {INSTALL_HINT}") from err
+    return pv
+
+
+def pyplot():
+    """Import matplotlib.pyplot with a non-interactive backend when there is no display."""
+    try:
+        import matplotlib
+    except ImportError as err:  # pragma: no cover - depends on the environment
+        raise ImportError(f"spectral_igl.viz needs matplotlib for plots: {INSTALL_HINT}") from err
+    if headless() and "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def colormap(name):
+    """A matplotlib colormap: ``"distance"`` (blue to red), ``"cyclic"`` (hue circle) or any name."""
+    pyplot()
+    from matplotlib.colors import Colormap, LinearSegmentedColormap
+
+    if isinstance(name, Colormap):
+        return name
+    if name == "distance":
+        return LinearSegmentedColormap.from_list("spectral_igl_distance", DISTANCE_COLORS, N=256)
+    if name == "cyclic":
+        return LinearSegmentedColormap.from_list("spectral_igl_cyclic", CYCLIC_COLORS, N=256)
+    import matplotlib
+
+    try:
+        return matplotlib.colormaps[name]
+    except KeyError as err:
+        raise ValueError(f"unknown colormap {name!r}; use 'distance', 'cyclic' or a matplotlib name") from err
+
+
+def to_pyvista(shape):
+    """Convert a shape to a pyvista dataset.
+
+    Parameters
+    ----------
+    shape : tuple, array, Laplacian or pyvista.DataSet
+        ``(V, F)`` with ``F : (m, 3) int`` (triangle mesh), ``(V, T)`` with ``T : (m, 4)
+        int`` (tetrahedral mesh), ``V : (n, 3) float`` alone (point set), a
+        :class:`~spectral_igl.Laplacian` (its ``data``), or a pyvista dataset.
+
+    Returns
+    -------
+    mesh : pyvista.PolyData or pyvista.UnstructuredGrid
+    kind : {"triangle", "tet", "points"}
+    """
+    pv = pyvista()
+    from .._validate import as_cells, as_points, describe
+
+    if isinstance(shape, pv.DataSet):
+        if isinstance(shape, pv.UnstructuredGrid):
+            return shape, "tet"
+        if isinstance(shape, pv.PolyData) and shape.n_cells and shape.n_verts != shape.n_cells:
+            return shape, "triangle"
+        return shape, "points"
+    data = getattr(shape, "data", None)
+    if isinstance(data, dict) and hasattr(shape, "L"):  # a Laplacian
+        if "V" in data and ("F" in data or "T" in data):
+            shape = (data["V"], data["T"] if "T" in data else data["F"])
+        elif "V" in data or "P" in data:
+            shape = data.get("V", data.get("P"))
+        else:
+            raise ValueError(f"this Laplacian (domain {shape.domain!r}) carries no geometry to draw")
+    if isinstance(shape, (tuple, list)) and len(shape) == 2 and np.ndim(shape[0]) == 2 and np.ndim(shape[1]) == 2:
+        V = as_points(shape[0], "V", dims=(2, 3))
+        if V.shape[1] == 2:
+            V = np.column_stack([V, np.zeros(len(V))])
+        C = as_cells(shape[1], len(V), "cells", sizes=(3, 4))
+        cells = np.column_stack([np.full(len(C), C.shape[1]), C]).ravel()
+        if C.shape[1] == 3:
+            return pv.PolyData(V, cells), "triangle"
+        return pv.UnstructuredGrid(cells, np.full(len(C), pv.CellType.TETRA, dtype=np.uint8), V), "tet"
+    if isinstance(shape, np.ndarray) or isinstance(shape, (list, tuple)):
+        P = as_points(shape, "points", dims=(2, 3))
+        if P.shape[1] == 2:
+            P = np.column_stack([P, np.zeros(len(P))])
+        return pv.PolyData(P), "points"
+    raise TypeError(f"cannot draw {describe(shape)}; expected (V, F), (V, T), points, a Laplacian "
+                    "or a pyvista dataset")
+
+
+def save_png(image, path, max_colors: int | None = None):
+    """Write an RGB image array to ``path`` as a (palette-compressed) PNG.
+
+    With ``max_colors`` the image is quantised to an adaptive palette (smaller files,
+    at the price of some banding in smooth gradients).
+    """
+    from PIL import Image
+
+    img = Image.fromarray(np.asarray(image, dtype=np.uint8))
+    if max_colors:
+        img = img.convert("RGB").quantize(colors=max_colors, method=Image.Quantize.MEDIANCUT)
+    img.save(str(path), optimize=True)
+    return path
