@@ -1,0 +1,19 @@
+"""Applications built on the engine: harmonic functions and critical points, smoothing,
+time-scale selection, geodesic and transport distances, basis functions, waves."""
+from .basis import auto_diffusion, diffusion_basis, feature_points, graph_extrema
+from .critical_points import CriticalPoints, critical_points
+from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
+from .harmonic import harmonic
+from .scale import optimal_time
+from .smoothing import diffusion_smooth, smooth, smooth_constrained
+from .transport import sinkhorn, wasserstein_distance
+from .waves import schrodinger
+
+__all__ = [
+    "CriticalPoints", "critical_points", "harmonic",
+    "smooth", "smooth_constrained", "diffusion_smooth", "optimal_time",
+    "HeatGeodesics", "geodesic_distance", "varadhan_distance",
+    "sinkhorn", "wasserstein_distance",
+    "diffusion_basis", "feature_points", "auto_diffusion", "graph_extrema",
+    "schrodinger",
+]

@@ -1,0 +1,312 @@
+"""Geodesic distances from heat: the heat method (Crane et al. 2013) and Varadhan's formula."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .._factor import factorize
+from .._validate import as_indices, as_positive, describe
+from ..laplacian import Laplacian, laplacian
+from ..laplacian.mesh import element_measures
+
+__all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
+
+_STEPS = ("euler", "intrinsic_delaunay", "engine")
+
+
+def mean_edge_length(V: np.ndarray, C: np.ndarray) -> float:
+    """Mean length of the (unique) edges of a triangle or tetrahedral mesh."""
+    k = C.shape[1]
+    E = np.concatenate([C[:, [a, b]] for a in range(k) for b in range(a + 1, k)])
+    E = np.sort(E, axis=1)
+    key = np.unique(E[:, 0] * np.int64(V.shape[0]) + E[:, 1])
+    E = np.c_[key // V.shape[0], key % V.shape[0]]
+    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+
+
+def _triangle_gradients(l: np.ndarray, F: np.ndarray, n: int):
+    """Gradient operator (2m, n) and areas (m,) of triangles given by edge lengths.
+
+    ``l[f, i]`` is the length of the edge opposite corner ``i``. Each triangle is laid
+    out in its own plane (corner 0 at the origin, corner 1 on the x axis); the gradient
+    of a piecewise-linear function is expressed in that frame, which is all the heat
+    method needs (it only normalises and integrates against the same operator).
+    """
+    l0, l1, l2 = l[:, 0], l[:, 1], l[:, 2]
+    x = (l1 ** 2 + l2 ** 2 - l0 ** 2) / (2.0 * l2)
+    y = np.sqrt(np.maximum(l1 ** 2 - x ** 2, 0.0))
+    P = np.stack([np.zeros((len(F), 2)), np.c_[l2, np.zeros(len(F))], np.c_[x, y]], axis=1)
+    A = 0.5 * l2 * y
+    m = len(F)
+    rows, cols, vals = [], [], []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv2A = np.where(A > 0, 1.0 / (2.0 * A), 0.0)
+    for a in range(3):
+        b, c = (a + 1) % 3, (a + 2) % 3
+        e = P[:, c] - P[:, b]
+        gx, gy = -e[:, 1] * inv2A, e[:, 0] * inv2A
+        rows += [np.arange(m), m + np.arange(m)]
+        cols += [F[:, a], F[:, a]]
+        vals += [gx, gy]
+    G = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(2 * m, n))
+    return G, A
+
+
+def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
+    r"""Gradient, areas, stiffness and lumped mass on the intrinsic Delaunay triangulation.
+
+    Edge lengths are first mollified (Sharp and Crane 2020): every length grows by the
+    smallest :math:`\delta` that gives each triangle inequality a margin of
+    ``mollify`` times the mean edge length, so that needle and degenerate triangles
+    get a well-defined geometry. The lengths are then flipped to the intrinsic
+    Delaunay triangulation (libigl), where all cotangent weights are non-negative.
+
+    Returns
+    -------
+    G : (2m, n) sparse
+        Per-triangle gradient, x rows then y rows, in each triangle's own frame.
+    A : (m,) float
+        Triangle areas.
+    L : (n, n) sparse
+        Stiffness :math:`G^	op \mathrm{diag}(A, A)\, G`, positive semi-definite.
+    M : (n, n) sparse diagonal
+        Lumped (barycentric) mass: a third of the incident triangle areas.
+    h : float
+        Mean edge length of the intrinsic triangulation.
+    """
+    import igl
+
+    n = V.shape[0]
+    l = igl.edge_lengths(V, F)
+    if mollify > 0:
+        eps = mollify * float(l.mean())
+        margin = np.stack([l[:, 1] + l[:, 2] - l[:, 0], l[:, 2] + l[:, 0] - l[:, 1],
+                           l[:, 0] + l[:, 1] - l[:, 2]], axis=1)
+        delta = max(0.0, float(np.max(eps - margin)))
+        l = l + delta
+    l, Fi = igl.intrinsic_delaunay_triangulation(np.ascontiguousarray(l), F)[:2]
+    G, A = _triangle_gradients(l, Fi, n)
+    h = float(l.mean())
+    AA = sp.diags(np.r_[A, A])
+    L = (G.T @ AA @ G).tocsr()
+    mass = np.bincount(Fi.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
+    mass[mass <= 0] = float(mass[mass > 0].mean()) if np.any(mass > 0) else 1.0
+    return G, A, L, sp.diags(mass).tocsr(), h
+
+
+def _as_laplacian(lap_or_mesh, mass: str = "lumped") -> Laplacian:
+    if isinstance(lap_or_mesh, Laplacian):
+        lap = lap_or_mesh
+        if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
+            raise ValueError(f"geodesics need a triangle or tet mesh Laplacian (with V and F/T "
+                             f"in lap.data), got domain {lap.domain!r}")
+        return lap
+    if isinstance(lap_or_mesh, (tuple, list)) and len(lap_or_mesh) == 2:
+        V, C = lap_or_mesh
+        return laplacian(V, C, mass=mass)
+    raise TypeError(f"expected a Laplacian or a (V, F) / (V, T) pair, got {describe(lap_or_mesh)}")
+
+
+def _cells(lap: Laplacian) -> np.ndarray:
+    return lap.data["F"] if lap.domain == "triangle" else lap.data["T"]
+
+
+class HeatGeodesics:
+    r"""Reusable heat-method geodesic distance solver (Crane, Weischedel, Wardetzky 2013).
+
+    Three steps, each a sparse solve with a matrix factorized once here:
+
+    .. math::
+        u = (B + tL)^{-1}\delta_\gamma, \qquad X = -\nabla u / |\nabla u|, \qquad
+        L \phi = \nabla^{\!\top} (A\, X),
+
+    then :math:`\phi` is shifted to vanish at the sources (``A`` the element areas or
+    volumes, so :math:`\nabla^\top A \nabla = L` for the cotangent stiffness).
+
+    Parameters
+    ----------
+    lap_or_mesh : Laplacian or (V, F) or (V, T)
+        A triangle or tetrahedral mesh Laplacian (its ``L`` and ``B`` are used), or the
+        arrays, in which case the cotangent Laplacian with lumped mass is built.
+    t : float, optional
+        Diffusion time; default :math:`h^2`, ``h`` the mean edge length (Crane's m = 1).
+    step : {"euler", "intrinsic_delaunay", "engine"}, default "intrinsic_delaunay"
+        How the heat is diffused. ``"euler"``: one backward-Euler step
+        :math:`(B + tL)^{-1}` with ``lap``. ``"intrinsic_delaunay"``: the same step with
+        the intrinsic-Delaunay stiffness (triangles only; tets fall back to ``"euler"``).
+        ``"engine"``: the exact heat kernel :math:`e^{-t\tilde L}B^{-1}\delta` through
+        :class:`spectral_igl.SpectralOperator`. The default is the most accurate against
+        exact geodesics on the meshes measured in ``benchmarks/geodesics.py``; the exact
+        kernel is the least accurate there because it underflows a few rings from the
+        source, where its normalised gradient is noise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from data_generators import icosphere
+    >>> V, F = icosphere(4)
+    >>> d = HeatGeodesics((V, F)).compute(0)
+    >>> exact = np.arccos(np.clip(V @ V[0], -1, 1))
+    >>> bool(np.abs(d - exact).max() < 0.05)
+    True
+    """
+
+    def __init__(self, lap_or_mesh, t: float | None = None, step: str = "intrinsic_delaunay",
+                 mollify: float = 1e-6):
+        import igl
+
+        if step not in _STEPS:
+            raise ValueError(f"step must be one of {_STEPS}, got {step!r}")
+        lap = _as_laplacian(lap_or_mesh)
+        V, C = lap.data["V"], _cells(lap)
+        if lap.domain == "tet" and step == "intrinsic_delaunay":
+            step = "euler"
+        self.lap, self.step = lap, step
+        self.n = lap.n
+        self.mollify = float(mollify)
+        self.h = mean_edge_length(V, C)
+        if step == "intrinsic_delaunay":
+            self.G, self.A, Lp, M, self.h = intrinsic_operators(V, C, mollify=self.mollify)
+            self._dim = 2
+            Lh = Lp
+        else:
+            Vg = V if V.shape[1] == 3 else np.c_[V, np.zeros(len(V))]
+            self.G = igl.grad(np.ascontiguousarray(Vg), C).tocsr()
+            self._dim = self.G.shape[0] // C.shape[0]
+            self.A = element_measures(V, C)
+            Lp = Lh = lap.L
+            M = sp.diags(lap.mass).tocsr()
+        self.t = self.h ** 2 if t is None else as_positive(t, "t")
+        if step == "engine":
+            from .. import SpectralOperator, filters
+
+            self._op = SpectralOperator(lap, filters.heat(self.t))
+        else:
+            self._heat = factorize((M + self.t * Lh).tocsr())
+        # Poisson solve: ground one vertex per component (the rhs is consistent)
+        ground = np.unique(lap.components, return_index=True)[1]
+        self._free = np.setdiff1d(np.arange(self.n), ground)
+        self._poisson = factorize(sp.csr_matrix(Lp[self._free][:, self._free]))
+
+    def _diffuse(self, delta: np.ndarray) -> np.ndarray:
+        if self.step == "engine":
+            return np.real(self._op.apply_inverse_mass(delta))
+        return self._heat.solve(delta)
+
+    def compute(self, sources) -> np.ndarray:
+        """(n,) geodesic distance to the nearest of ``sources`` (int or (s,) int).
+
+        Vertices in a connected component without a source get ``inf``.
+        """
+        src = as_indices(sources, self.n, "sources")
+        delta = np.zeros(self.n)
+        delta[src] = 1.0
+        u = self._diffuse(delta)
+        g = (self.G @ u).reshape(self._dim, -1).T
+        norm = np.linalg.norm(g, axis=1)
+        X = np.zeros_like(g)
+        ok = norm > 0
+        X[ok] = -g[ok] / norm[ok, None]
+        div = self.G.T @ (X * self.A[:, None]).T.ravel()
+        phi = np.zeros(self.n)
+        phi[self._free] = self._poisson.solve(div[self._free])
+        comps = self.lap.components
+        out = np.full(self.n, np.inf)
+        for c in np.unique(comps[src]):
+            mask = comps == c
+            s = src[comps[src] == c]
+            out[mask] = phi[mask] - phi[s].mean()
+        return out
+
+
+def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None = None,
+                      step: str = "intrinsic_delaunay"):
+    r"""Geodesic distance from ``source`` by the heat method or Varadhan's formula.
+
+    Parameters
+    ----------
+    lap_or_mesh : Laplacian or (V, F) or (V, T)
+        Triangle or tetrahedral mesh.
+    source : int or (s,) int
+        Source vertex (or vertices: distance to the nearest).
+    method : {"heat", "varadhan"}
+        ``"heat"``: :class:`HeatGeodesics` (recommended). ``"varadhan"``:
+        :func:`varadhan_distance`, :math:`d = \sqrt{-4t \log K_t(p, q)}` (see there for
+        where it is and is not accurate).
+    t : float, optional
+        Diffusion time; default :math:`h^2` for the heat method, ``h`` the mean edge
+        length, and :math:`4h^2` for Varadhan.
+    step : str
+        Heat step of the heat method, see :class:`HeatGeodesics`.
+
+    Returns
+    -------
+    (n,) float
+    """
+    if method == "heat":
+        return HeatGeodesics(lap_or_mesh, t=t, step=step).compute(source)
+    if method == "varadhan":
+        return varadhan_distance(lap_or_mesh, source, t=t)
+    raise ValueError(f"method must be 'heat' or 'varadhan', got {method!r}")
+
+
+def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bool = True,
+                      method: str = "auto", tol: float = 1e-12):
+    r"""Geodesic distance from the heat kernel by Varadhan's formula.
+
+    .. math:: d(p, q)^2 = \lim_{t\to 0} -4t \log K_t(p, q)
+
+    Parameters
+    ----------
+    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    source : int
+        Source vertex.
+    t : float, optional
+        Time; default :math:`4h^2`, ``h`` the mean edge length.
+    normalize : bool, default True
+        Divide out the leading term of the short-time expansion,
+        :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
+        volumes), i.e. use :math:`d^2 = -4t \log((4\pi t)^{D/2} K_t)`; without it the
+        estimate is off by :math:`2Dt\log(4\pi t)` in :math:`d^2` even at the source.
+    method, tol
+        Passed to :class:`spectral_igl.SpectralOperator` for :math:`K_t = e^{-t\tilde
+        L}B^{-1}`.
+
+    Returns
+    -------
+    (n,) float
+        ``inf`` where the computed kernel is not positive (it has fallen below the
+        accuracy of the evaluation).
+
+    Notes
+    -----
+    The formula needs :math:`\log K_t` far from the source, where :math:`K_t` is
+    :math:`e^{-d^2/4t}` small: an absolute error :math:`\epsilon` of the evaluated
+    kernel makes every distance beyond about :math:`\sqrt{4t\log(1/\epsilon)}` unusable.
+    Small ``t`` is needed for the limit, large ``t`` for the range; on a mesh of edge
+    length ``h`` the discrete kernel also departs from the smooth one for
+    :math:`t \lesssim h^2`. Measured accuracy is in ``benchmarks/geodesics.py``.
+    """
+    from .. import SpectralOperator, filters
+
+    lap = _as_laplacian(lap_or_mesh)
+    src = as_indices(source, lap.n, "source")
+    if src.size != 1:
+        raise ValueError(f"source must be a single vertex for Varadhan's formula, got {src.size}")
+    V, C = lap.data["V"], _cells(lap)
+    h = mean_edge_length(V, C)
+    t = 4.0 * h ** 2 if t is None else as_positive(t, "t")
+    e = np.zeros(lap.n)
+    e[src[0]] = 1.0
+    op = SpectralOperator(lap, filters.heat(t), method=method, tol=tol)
+    K = np.real(op.apply_inverse_mass(e))
+    D = 2.0 if lap.domain == "triangle" else 3.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        logk = np.where(K > 0, np.log(np.where(K > 0, K, 1.0)), -np.inf)
+        if normalize:
+            logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
+        d2 = -4.0 * t * logk
+    d = np.sqrt(np.maximum(d2, 0.0))
+    d[~np.isfinite(d2)] = np.inf
+    return d

@@ -1,0 +1,133 @@
+"""Least-squares and diffusion smoothing against the dense spectral filter; fewer critical points."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import spectral_igl as sig
+from data_generators import icosphere
+from spectral_igl.applications import critical_points, harmonic, smooth, smooth_constrained
+
+
+@pytest.fixture(scope="module")
+def sphere_lumped():
+    V, F = icosphere(3)
+    return V, F, sig.laplacian(V, F, mass="lumped")
+
+
+def noisy(V, seed=0, sigma=0.1):
+    clean = V[:, 0] + 0.5 * V[:, 1] * V[:, 2]
+    rng = np.random.default_rng(seed)
+    return clean, clean + sigma * rng.standard_normal(len(V))
+
+
+def test_smooth_is_the_spectral_filter():
+    V, F = icosphere(2)
+    lap = sig.laplacian(V, F, mass="lumped")
+    _, f = noisy(V)
+    lam, X = sig.dense_eigs(lap)
+    eps = 30.0
+    expected = X @ (eps / (lam ** 2 + eps) * (X.T @ (lap.B @ f)))
+    np.testing.assert_allclose(smooth(lap, f, eps), expected, atol=1e-10)
+    # columns independent, shape follows input
+    G = smooth(lap, np.c_[f, 2 * f], eps)
+    assert G.shape == (lap.n, 2)
+    np.testing.assert_allclose(G[:, 1], 2 * expected, atol=1e-9)
+
+
+def test_smooth_removes_noise_and_critical_points(sphere_lumped):
+    V, F, lap = sphere_lumped
+    clean, f = noisy(V)
+    g = smooth(lap, f, 1000.0)  # keeps l <= 2 (lambda <= 6) at > 96%
+    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
+    assert err(g) < 0.5 * err(f)
+    before, after = critical_points(V, F, f), critical_points(V, F, g)
+    assert after.n_minima + after.n_maxima < 0.2 * (before.n_minima + before.n_maxima)
+    assert after.n_minima - after.n_saddles + after.n_maxima == 2
+
+
+def test_smooth_constrained_interpolates(sphere_lumped):
+    V, F, lap = sphere_lumped
+    clean, f = noisy(V)
+    cp = critical_points(V, F, clean)
+    fixed = np.r_[cp.minima, cp.maxima, np.arange(0, lap.n, 17)]
+    fixed = np.unique(fixed)
+    g = smooth_constrained(lap, f, fixed)
+    np.testing.assert_array_equal(g[fixed], f[fixed])
+    np.testing.assert_allclose(g, harmonic(lap, fixed, f[fixed], k=2), atol=1e-12)
+    # with a fidelity term: still interpolating, closer to f elsewhere, and eps -> inf gives f
+    g1 = smooth_constrained(lap, f, fixed, eps=10.0)
+    np.testing.assert_array_equal(g1[fixed], f[fixed])
+    ginf = smooth_constrained(lap, f, fixed, eps=1e9)
+    assert np.abs(ginf - f).max() < 1e-3
+    # optimality: the constrained energy at g1 is below that of perturbations keeping the constraints
+    M_inv = 1.0 / lap.mass
+
+    def energy(u):
+        Lu = lap.L @ u
+        return Lu @ (M_inv * Lu) + 10.0 * (u - f) @ (lap.B @ (u - f))
+
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        p = rng.standard_normal(lap.n) * 1e-3
+        p[fixed] = 0
+        assert energy(g1 + p) > energy(g1)
+
+
+def test_validation(sphere_lumped):
+    V, F, lap = sphere_lumped
+    f = V[:, 0]
+    with pytest.raises(ValueError, match="eps"):
+        smooth(lap, f, 0.0)
+    with pytest.raises(ValueError, match="eps"):
+        smooth_constrained(lap, f, [0, 1], eps=-1.0)
+    with pytest.raises(ValueError, match="f must have shape"):
+        smooth(lap, f[:-1], 1.0)
+    with pytest.raises(ValueError, match="duplicate"):
+        smooth_constrained(lap, f, [1, 1])
+
+
+def test_diffusion_smooth_matches_dense():
+    pytest.importorskip("spectral_igl.filters")
+    from spectral_igl.applications import diffusion_smooth
+
+    V, F = icosphere(2)
+    lap = sig.laplacian(V, F)  # full mass
+    _, f = noisy(V)
+    lam, X = sig.dense_eigs(lap)
+    for t in (1e-3, 0.05):
+        expected = X @ (np.exp(-lam * t) * (X.T @ (lap.B @ f)))
+        g = diffusion_smooth(lap, f, t)
+        assert np.sqrt((g - expected) @ (lap.B @ (g - expected))) < 1e-6 * np.sqrt(f @ (lap.B @ f))
+
+
+def test_optimal_time_beats_a_decade_either_side():
+    pytest.importorskip("spectral_igl.filters")
+    from spectral_igl.applications import diffusion_smooth, optimal_time
+
+    V, F = icosphere(4)
+    lap = sig.laplacian(V, F)
+    clean = V[:, 0] + 0.5 * V[:, 1] * V[:, 2]
+    f = clean + 0.1 * np.random.default_rng(0).standard_normal(lap.n)
+    t, curve = optimal_time(lap, f)
+    assert set(curve) == {"t", "residual", "energy", "curvature"}
+    assert np.all(np.diff(curve["residual"]) > 0) and np.all(np.diff(curve["energy"]) < 0)
+    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
+    e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
+    assert e[1] < e[0] and e[1] < e[2]
+    assert e[1] < 0.5 * err(f)
+
+
+def test_volume_diffusion_smoothing_with_optimal_time():
+    pytest.importorskip("spectral_igl.filters")
+    from data_generators import box_tets
+    from spectral_igl.applications import diffusion_smooth, optimal_time
+
+    V, T = box_tets((8, 8, 8), (1.0, 1.0, 1.0))
+    lap = sig.laplacian(V, T)
+    clean = np.cos(np.pi * V[:, 0]) + 0.5 * np.cos(np.pi * V[:, 1])
+    f = clean + 0.2 * np.random.default_rng(1).standard_normal(lap.n)
+    t, _ = optimal_time(lap, f, n_times=32)
+    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
+    e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
+    assert e[1] < e[0] and e[1] < e[2]
