@@ -17,7 +17,7 @@ def main(argv=None):
     import spectral_igl as sig
     from spectral_igl import filters
 
-    V, F, name = C.surface(args, level_quick=2)
+    V, F, name = C.surface(args, level_quick=3)
     lap = sig.laplacian(V, F)
     i = C.extreme_vertex(V, 0)
     cases = [("biharmonic", filters.biharmonic(), C.singular(lambda s: s ** -2.0)),

@@ -96,16 +96,7 @@ def test_progress_bar_renders():
     assert "100%" in text and "#" * 28 in text and text.endswith("\n")
 
 
-# ---- jobs that need the engine ------------------------------------------------------------
-def _needs(*names):
-    import spectral_igl as sig
-
-    missing = [n for n in names if not hasattr(sig, n)]
-    if missing:
-        pytest.skip(f"spectral_igl.{', '.join(missing)} not available yet")
-    return sig
-
-
+# ---- jobs ------------------------------------------------------------
 def _dense_distance(lap, i, phi2):
     import spectral_igl as sig
 
@@ -114,7 +105,7 @@ def _dense_distance(lap, i, phi2):
 
 
 def test_distance_writes_npy_csv_png(tmp_path, capsys):
-    sig = _needs("spectral_distance", "SpectralOperator")
+    import spectral_igl as sig
     from data_generators import icosphere
 
     from test_viz import assert_not_blank
@@ -136,7 +127,7 @@ def test_distance_writes_npy_csv_png(tmp_path, capsys):
 
 
 def test_kernel_on_mesh_files(tmp_path):
-    sig = _needs("SpectralOperator")
+    import spectral_igl as sig
     from data_generators import box_tets, icosphere
 
     from spectral_igl.io import write_mesh
@@ -162,8 +153,6 @@ def test_kernel_on_mesh_files(tmp_path):
 
 
 def test_view_screenshot(tmp_path):
-    _needs("SpectralOperator", "spectral_distance")
-    pytest.importorskip("pyvista")
     from test_viz import assert_not_blank
 
     png = tmp_path / "view.png"

@@ -57,6 +57,9 @@ class Viewer:
                  weights="cotan"):
         pv = pyvista()
         from .. import Laplacian, laplacian
+        from ._levelsets import _lines_over_surfaces
+
+        _lines_over_surfaces()
 
         if quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
