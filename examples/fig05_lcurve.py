@@ -18,14 +18,14 @@ def main(argv=None):
     import spectral_igl as sig
     from data_generators import box_tets
 
-    V, T = box_tets((10, 8, 6) if args.quick else (20, 15, 10))
+    V, T = box_tets((8, 6, 4) if args.quick else (20, 15, 10))
     lap = sig.laplacian(V, T)
     c = V - V.mean(0)
     clean = np.cos(4 * c[:, 0]) * np.sin(5 * c[:, 1] + 1) + 2 * c[:, 2]
     rng = np.random.default_rng(3)
     noisy = clean + 0.15 * np.ptp(clean) * rng.standard_normal(lap.n)
     # the L-curve of the package: residual and energy at each tried time, its corner t_opt
-    t_opt, curve = sig.optimal_time(lap, noisy, n_times=12 if args.quick else 32)
+    t_opt, curve = sig.optimal_time(lap, noisy, n_times=10 if args.quick else 32)
     smoothed = np.asarray(sig.diffusion_smooth(lap, noisy, t_opt))
     err = lambda f: float(np.sqrt((f - clean) @ (lap.B @ (f - clean))))  # noqa: E731
     ts = np.asarray(curve["t"])

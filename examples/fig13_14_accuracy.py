@@ -25,11 +25,11 @@ def main(argv=None):
     from data_generators import icosphere
 
     times = [1e-3, 1e-1] if args.quick else [1e-3, 1e-2, 1e-1, 1.0]
-    level = 3 if args.quick else 4
+    level = 2 if args.quick else 4
     V, F = icosphere(level)
     lap = sig.laplacian(V, F)
     i = 0
-    ks = [10, 25, 50, 100, 200] if args.quick else [10, 25, 50, 100, 200, 400, 800]
+    ks = [10, 25, 50, 100] if args.quick else [10, 25, 50, 100, 200, 400, 800]
     ks = [k for k in ks if k < lap.n]
     plt = C.pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))

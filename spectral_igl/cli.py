@@ -388,33 +388,34 @@ def _read_signal(path, n):
 
 
 def _job_smooth(args):
-    _check_outputs(args.out, _OUTPUTS + (".obj", ".off", ".ply", ".stl"))
+    mesh_types = (".obj", ".off", ".ply", ".stl")
+    _check_outputs(args.out, _OUTPUTS + mesh_types)
+    geometry = args.signal is None
+    if not geometry and any(Path(o).suffix.lower() in mesh_types for o in args.out):
+        raise CLIError("a mesh can only be written when smoothing the shape itself (no --signal)",
+                       EXIT_USAGE)
     V, C, name = _load_shape(args)
-    lap = _laplacian(V, C, args)
-    f = _read_signal(args.signal, len(V)) if args.signal else V.copy()
+    f = _read_signal(args.signal, len(V)) if not geometry else V.copy()
     if args.noise:
         rng = np.random.default_rng(args.seed)
         span = float(np.ptp(f)) or 1.0
         f = f + args.noise * span * rng.standard_normal(f.shape)
+    if geometry:  # smoothing the shape itself: the operator is that of the (noisy) shape
+        V = f.copy()
+    lap = _laplacian(V, C, args)
     from . import diffusion_smooth
 
     t = args.time
-    if t is None:
+    if t is None:  # the L-curve corner, per column for several columns (their median)
         from . import optimal_time
 
-        t = optimal_time(lap, f)
-        t = float(t[0] if isinstance(t, tuple) else t)
+        cols = f.reshape(lap.n, -1).T
+        t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
     g = np.asarray(diffusion_smooth(lap, f, t, method=args.method, tol=args.tol))
     seconds = time.perf_counter() - start
-    geometry = args.signal is None
-    for out in args.out:
-        ext = Path(out).suffix.lower()
-        if ext in (".obj", ".off", ".ply", ".stl") and not geometry:
-            raise CLIError(f"{out}: a mesh can only be written when smoothing the shape itself",
-                           EXIT_USAGE)
     if geometry:
-        mesh_outs = [o for o in args.out if Path(o).suffix.lower() in (".obj", ".off", ".ply", ".stl")]
+        mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
         _write(mesh_outs, g, V, C, args)
         other = [o for o in args.out if o not in mesh_outs]
         pics = [o for o in other if o.lower().endswith(".png")]

@@ -98,7 +98,8 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     -------
     Evaluation
         ``values`` (n,) float (the real part for the complex wave filter), ``error_bound``
-        (certified, absolute, in the B-norm; ``None`` when the method gives none),
+        (absolute: in the B-norm for a kernel column, the largest bound on
+        :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
         ``seconds``.
     """
     from .._validate import as_index
@@ -127,9 +128,16 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
 
 
 def _distance(spectral_distance, lap, filt, source, method, tol):
-    out = spectral_distance(lap, filt, source, method=method, tol=tol)
-    bound = None
-    if isinstance(out, tuple):
-        out, bound = out[0], out[1]
-    bound = _bound(getattr(out, "error_bound", bound))
-    return np.asarray(out), bound
+    """Distances from ``source`` and a bound on each |d - d~| (``None`` when there is none).
+
+    For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``
+    with ``e`` the bound on the squared distances.
+    """
+    out, info = spectral_distance(lap, filt, source, method=method, tol=tol, return_info=True)
+    out = np.asarray(out)
+    e = info.get("d2_error_bound")
+    if e is None or not np.isfinite(e):
+        return out, None
+    d = np.delete(np.abs(out), source)
+    per = np.minimum(np.sqrt(e), e / np.maximum(d, np.finfo(float).tiny))
+    return out, float(per.max(initial=0.0))
