@@ -127,6 +127,10 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
+    p.add_argument("--diagonal", default="auto", choices=("auto", "exact", "probing", "dense"),
+                   help="distances: how the kernel diagonal is obtained (exact: one application "
+                        "per vertex; probing: colouring estimator; default auto: exact up to "
+                        "3000 vertices)")
 
 
 def build_parser():
@@ -189,7 +193,8 @@ def build_parser():
                         "signal's range) -- for demonstrations")
     p.add_argument("--seed", type=int, default=0, help="seed of --noise")
     p.add_argument("-t", "--time", type=_positive, default=None,
-                   help="diffusion time (default: chosen by the L-curve, optimal_time)")
+                   help="diffusion time (default: for --signal, the corner of the L-curve, "
+                        "optimal_time; for the shape itself, the squared mean edge length)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8)
@@ -332,7 +337,7 @@ def _job_kernel_distance(args):
     if FILTERS[args.filter] and t is None:
         t = _default_time(lap)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
-                  order=args.order)
+                  order=args.order, diagonal=args.diagonal)
     prog.step("evaluated")
     kind = "distance" if args.job == "distance" else "cyclic"
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
@@ -406,7 +411,13 @@ def _job_smooth(args):
     from . import diffusion_smooth
 
     t = args.time
-    if t is None:  # the L-curve corner, per column for several columns (their median)
+    if t is None and geometry:
+        # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
+        # corner is where the shape itself shrinks away; smooth at the scale of an edge
+        E = C[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2) if C.shape[1] == 3 else \
+            C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
+        t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
+    elif t is None:  # the L-curve corner, per column for several columns (their median)
         from . import optimal_time
 
         cols = f.reshape(lap.n, -1).T
@@ -462,7 +473,8 @@ def _job_view(args):
     t = args.time if args.time is not None else _default_time(lap)
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
-                    source=args.source, tol=args.tol, off_screen=True if off else None)
+                    source=args.source, tol=args.tol, off_screen=True if off else None,
+                    diagonal=args.diagonal)
     if off:
         Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
