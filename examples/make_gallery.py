@@ -1,6 +1,6 @@
 """Run the figure scripts and copy a selection of their images, compressed, to docs/gallery/.
 
-    python examples/make_gallery.py [--quick] [--out figures/]
+    python examples/make_gallery.py [--quick] [--out figures/] [--only fig07 fig15]
 """
 from __future__ import annotations
 
@@ -11,10 +11,12 @@ from pathlib import Path
 import _common as C
 
 GALLERY = C.ROOT / "docs" / "gallery"
-PICKS = ["fig02_harmonic_6.png", "fig03_eigenfunction_10.png", "fig08_volumetric_heat_kernel.png",
-         "fig09_distances.png", "fig12_biharmonic_stability.png", "fig13_error_vs_k.png",
-         "fig15_gibbs.png", "fig15_truncated_kernel.png", "fig07_17_time_vs_n.png",
-         "fig24_smoothing.png", "fig10_filters.png", "fig16_accuracy_vs_time.png"]
+PICKS = ["fig09_distances.png", "fig02_harmonic_6.png", "fig03_eigenfunction_10.png",
+         "fig04_anisotropic_heat.png", "fig05_volumetric_smoothing.png",
+         "fig08_volumetric_heat_kernel.png", "fig12_biharmonic_stability.png",
+         "fig18_23_robustness.png", "fig24_smoothing.png", "fig15_truncated_kernel.png",
+         "fig15_gibbs.png", "fig13_error_vs_k.png", "fig07_17_time_vs_n.png",
+         "fig16_accuracy_vs_time.png", "fig05_lcurve.png", "fig10_filters.png"]
 MAX_BYTES = 150_000
 
 
@@ -36,16 +38,23 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--out", default="figures")
+    p.add_argument("--only", nargs="+", metavar="NAME",
+                   help="only run these scripts (e.g. fig07 fig15); the others' images are reused")
     args = p.parse_args(argv)
     from spectral_igl.cli import main as cli
 
-    cli(["figures", "--out", args.out] + (["--quick"] if args.quick else []))
+    code = cli(["figures", "--out", args.out] + (["--quick"] if args.quick else [])
+               + (["--only", *args.only] if args.only else []))
+    if code != 0:
+        raise SystemExit(code)
     GALLERY.mkdir(parents=True, exist_ok=True)
     for name in PICKS:
         src = Path(args.out) / name
-        if src.is_file():
-            compress(src, GALLERY / name)
-            print(f"{GALLERY / name}: {(GALLERY / name).stat().st_size // 1000} KB")
+        if not src.is_file():
+            print(f"{src}: missing (not copied)")
+            continue
+        compress(src, GALLERY / name)
+        print(f"{GALLERY / name}: {(GALLERY / name).stat().st_size // 1000} KB")
 
 
 if __name__ == "__main__":
