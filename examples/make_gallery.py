@@ -1,6 +1,6 @@
 """Run the figure scripts and copy a selection of their images, compressed, to docs/gallery/.
 
-    python examples/make_gallery.py [--quick] [--out figures/] [--only fig07 fig15]
+    python examples/make_gallery.py [--quick] [--out figures/] [--only fig07 fig15] [--copy-only]
 """
 from __future__ import annotations
 
@@ -21,7 +21,11 @@ MAX_BYTES = 150_000
 
 
 def compress(src, dst):
-    """Copy ``src`` to ``dst``, palette-quantised and downscaled until it is under MAX_BYTES."""
+    """Copy ``src`` to ``dst``; when over MAX_BYTES, a 256-colour octree palette with dithering.
+
+    The octree palette keeps the whole hue circle of the colour bars (a median-cut palette
+    drops rare hues); the image is downscaled only if the palette is still too large.
+    """
     from PIL import Image
 
     shutil.copyfile(src, dst)
@@ -30,7 +34,8 @@ def compress(src, dst):
         img = Image.open(src).convert("RGB")
         if scale < 1.0:
             img = img.resize((int(img.width * scale), int(img.height * scale)), Image.LANCZOS)
-        img.quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(dst, optimize=True)
+        img.quantize(colors=256, method=Image.Quantize.FASTOCTREE,
+                     dither=Image.Dither.FLOYDSTEINBERG).save(dst, optimize=True)
         scale *= 0.85
 
 
@@ -40,13 +45,16 @@ def main(argv=None):
     p.add_argument("--out", default="figures")
     p.add_argument("--only", nargs="+", metavar="NAME",
                    help="only run these scripts (e.g. fig07 fig15); the others' images are reused")
+    p.add_argument("--copy-only", action="store_true",
+                   help="run no script: copy the images already in --out")
     args = p.parse_args(argv)
     from spectral_igl.cli import main as cli
 
-    code = cli(["figures", "--out", args.out] + (["--quick"] if args.quick else [])
-               + (["--only", *args.only] if args.only else []))
-    if code != 0:
-        raise SystemExit(code)
+    if not args.copy_only:
+        code = cli(["figures", "--out", args.out] + (["--quick"] if args.quick else [])
+                   + (["--only", *args.only] if args.only else []))
+        if code != 0:
+            raise SystemExit(code)
     GALLERY.mkdir(parents=True, exist_ok=True)
     for name in PICKS:
         src = Path(args.out) / name
