@@ -19,9 +19,10 @@ def test_ball_volume_and_neumann_spectrum():
     assert lap.area() == pytest.approx(_enclosed_volume(V, F), rel=5e-3)
     assert lap.area() == pytest.approx(4 * np.pi / 3, rel=0.015)
     assert np.all(np.unique(T) == np.arange(len(Vt)))
-    # first nonzero Neumann eigenvalue of the unit ball: (first root of j1')² = 2.0815758…²
+    # first nonzero Neumann eigenvalue of the unit ball, (first root of j1')² = 2.0815759…²;
+    # about 2-3% high on this coarse mesh (n ≈ 900, FEM errors are positive)
     ev, _ = sig.eigs(lap, 4)
-    assert np.allclose(ev[1:], 2.0815759778671 ** 2, rtol=0.08)
+    assert np.allclose(ev[1:], 2.0815759778671 ** 2, rtol=0.04)
 
 
 def test_generator_and_validation():
