@@ -22,6 +22,11 @@ def _face_frames(V, F):
     return (e0, e1, e2), N, dbl
 
 
+def _scatter(idx, vals, n):
+    """Row sums by index: out[i] = sum of vals[k] with idx[k] == i, vals (K, d)."""
+    return np.stack([np.bincount(idx, weights=vals[:, j], minlength=n) for j in range(vals.shape[1])], axis=1)
+
+
 def face_curvature(V, F):
     r"""Principal curvatures and directions per face.
 
@@ -47,9 +52,8 @@ def face_curvature(V, F):
     (e0, e1, e2), N, dbl = _face_frames(V, F)
     area = 0.5 * dbl
     Nf = N / dbl[:, None]
-    vn = np.zeros((n, 3))
-    for a in range(3):
-        np.add.at(vn, F[:, a], N)
+    idx = F.T.ravel()  # vertex of (corner a, face f) at a * m + f
+    vn = _scatter(idx, np.tile(N, (3, 1)), n)
     nrm = np.linalg.norm(vn, axis=1)
     vn = np.where(nrm[:, None] > 0, vn / np.where(nrm > 0, nrm, 1.0)[:, None], 0.0)
     # orthonormal frame (u, w) of each face
@@ -75,11 +79,8 @@ def face_curvature(V, F):
     Fr = np.stack([u, w], axis=1)  # (m, 2, 3)
     S3 = np.einsum("mai,mab,mbj->mij", Fr, S2, Fr)
     S3 = np.where(np.isfinite(S3), S3, 0.0)
-    Sv = np.zeros((n, 3, 3))
-    wv = np.zeros(n)
-    for a in range(3):
-        np.add.at(Sv, F[:, a], S3 * area[:, None, None])
-        np.add.at(wv, F[:, a], area)
+    Sv = _scatter(idx, np.tile((S3 * area[:, None, None]).reshape(-1, 9), (3, 1)), n).reshape(n, 3, 3)
+    wv = np.bincount(idx, weights=np.tile(area, 3), minlength=n)
     Sv /= np.where(wv > 0, wv, 1.0)[:, None, None]
     Sf = (Sv[F[:, 0]] + Sv[F[:, 1]] + Sv[F[:, 2]]) / 3.0
     S2 = np.einsum("mai,mij,mbj->mab", Fr, Sf, Fr)

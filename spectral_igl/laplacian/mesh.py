@@ -36,7 +36,8 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
     V = as_points(V, "V", dims=(2, 3))
-    C = as_cells(C, V.shape[0], "F" if np.shape(C)[-1] == 3 else "T")
+    shape = np.shape(C) if isinstance(C, np.ndarray) else ()
+    C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
     if C.shape[1] == 4 and V.shape[1] != 3:
         raise ValueError(f"tetrahedra need 3-D vertices; V has shape {V.shape}")
     s = np.sort(C, axis=1)
