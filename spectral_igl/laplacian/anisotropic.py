@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from .._validate import as_nonnegative
 from ._operator import Laplacian, make_laplacian
-from .mesh import _MASSES, _mass, clean_mesh, mesh_components
+from .mesh import _MASSES, _clean_mesh, _mass, _star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
 
@@ -136,7 +136,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     alpha = as_nonnegative(alpha, "alpha")
     if mass not in _MASSES:
         raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, F, dropped = clean_mesh(V, F)
+    V, F, dropped, meas = _clean_mesh(V, F)
     if F.shape[1] != 3:
         raise ValueError(f"anisotropic_laplacian needs triangles, got F of shape {F.shape}")
     if V.shape[1] != 3:
@@ -163,7 +163,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     r = np.repeat(F, 3, axis=1).ravel()
     c = np.tile(F, (1, 3)).ravel()
     L = sp.csr_matrix((K.ravel(), (r, c)), shape=(n, n))
-    B = _mass(V, F, mass)
+    B = _mass(V, F, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[F.ravel()] = True
     if not referenced.all():
@@ -174,4 +174,4 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     data = {"V": V, "F": F, "weights": "anisotropic", "mass": mass, "alpha": alpha,
             "kappa": kappa, "dirs": dirs, "referenced": referenced}
-    return make_laplacian(L, B, domain="triangle", data=data, adjacency=mesh_components(n, F))
+    return make_laplacian(L, B, domain="triangle", data=data, adjacency=_star_adjacency(n, F))
