@@ -13,6 +13,11 @@ __all__ = ["point_cloud_laplacian", "tangent_voronoi_areas"]
 
 _METHODS = ("belkin", "liu")
 
+try:  # compiled clipping loop; _clip_cells below is its NumPy reference (tested equal)
+    from .._assembly import clip_cells as _clip_compiled
+except ImportError:  # pragma: no cover - source checkout without a build
+    _clip_compiled = None
+
 
 def _neighbours(P: np.ndarray, k: int | None, radius: float | None):
     """Directed neighbour pairs (i, j), i != j, and the local area per point h² (n,)."""
@@ -113,7 +118,10 @@ def _voronoi_from_knn(P, d, J):
     _, U = np.linalg.eigh(C)
     Q = np.einsum("nki,nij->nkj", nb, U[:, :, 1:])
     half = 1.5 * d[:, min(7, d.shape[1] - 1)]
-    A = _clip_cells(Q, half)
+    if _clip_compiled is not None:
+        A = _clip_compiled(np.ascontiguousarray(Q, dtype=np.float64), np.ascontiguousarray(half, dtype=np.float64))
+    else:
+        A = _clip_cells(Q, half)
     good = np.isfinite(A) & (A > 0)
     if not good.all():
         fill = float(np.mean(A[good])) if good.any() else 1.0
