@@ -6,11 +6,16 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_nonnegative
+from .._validate import as_cells, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import _MASSES, _mass, clean_mesh, mesh_components
+from .mesh import _MASSES, _clean_mesh, _mass, _star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
+
+try:  # compiled per-face kernel; the NumPy reference below computes the same (tested)
+    from .._assembly import anisotropic_faces as _faces_compiled
+except ImportError:  # pragma: no cover - source checkout without a build
+    _faces_compiled = None
 
 
 def _face_frames(V, F):
@@ -48,6 +53,18 @@ def face_curvature(V, F):
     dirs : (m, 2, 3) float
         Unit principal directions in the face plane, ``dirs[:, a]`` for ``kappa[:, a]``.
     """
+    V = np.ascontiguousarray(as_points(V, "V", dims=(3,)), dtype=np.float64)
+    F = np.ascontiguousarray(as_cells(F, V.shape[0], "F"), dtype=np.int64)
+    if F.shape[1] != 3:
+        raise ValueError(f"face_curvature needs triangles, got F of shape {F.shape}")
+    if _faces_compiled is not None:
+        kappa, dirs, _ = _faces_compiled(V, F, 0.0)
+        return kappa, dirs
+    return _face_curvature_numpy(V, F)
+
+
+def _face_curvature_numpy(V, F):
+    """NumPy reference of :func:`face_curvature` (the compiled kernel mirrors it)."""
     n = V.shape[0]
     (e0, e1, e2), N, dbl = _face_frames(V, F)
     area = 0.5 * dbl
@@ -94,6 +111,26 @@ def _phi(s, alpha):
     return 1.0 / (1.0 + alpha * np.abs(s))
 
 
+def _anisotropic_faces_numpy(V, F, alpha):
+    """NumPy reference: ``(kappa, dirs, K)`` with ``K`` (m, 3, 3) the stiffness of each face."""
+    (e0, e1, e2), N, dbl = _face_frames(V, F)
+    Nf = N / dbl[:, None]
+    # P1 gradients: grad phi_a = (n x e_a) / (2A), e_a the edge opposite vertex a
+    G = np.stack([np.cross(Nf, e) for e in (e0, e1, e2)], axis=1) / dbl[:, None, None]
+    area = 0.5 * dbl
+    kappa, dirs = _face_curvature_numpy(V, F)
+    if alpha == 0.0:
+        K = np.einsum("mai,mbi->mab", G, G)
+    else:
+        ph = _phi(kappa, alpha)  # (m, 2)
+        Gd = np.einsum("mai,mki->mak", G, dirs)  # gradient components in the principal frame
+        K = np.einsum("mak,mk,mbk->mab", Gd, ph, Gd)
+        # the normal component of each gradient is 0; the in-plane complement of
+        # span(dirs) is empty, so K is the full tensor product
+    K *= area[:, None, None]
+    return kappa, dirs, K
+
+
 def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Laplacian:
     r"""Anisotropic Laplace--Beltrami operator of Andreux, Rodolà, Aubry & Cremers (2014).
 
@@ -136,7 +173,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     alpha = as_nonnegative(alpha, "alpha")
     if mass not in _MASSES:
         raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, F, dropped = clean_mesh(V, F)
+    V, F, dropped, meas = _clean_mesh(V, F)
     if F.shape[1] != 3:
         raise ValueError(f"anisotropic_laplacian needs triangles, got F of shape {F.shape}")
     if V.shape[1] != 3:
@@ -145,25 +182,15 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         warnings.warn(f"dropped {dropped} degenerate face(s) (zero area or repeated vertex)",
                       RuntimeWarning, stacklevel=2)
     n = V.shape[0]
-    (e0, e1, e2), N, dbl = _face_frames(V, F)
-    Nf = N / dbl[:, None]
-    # P1 gradients: grad phi_a = (n x e_a) / (2A), e_a the edge opposite vertex a
-    G = np.stack([np.cross(Nf, e) for e in (e0, e1, e2)], axis=1) / dbl[:, None, None]
-    area = 0.5 * dbl
-    kappa, dirs = face_curvature(V, F)
-    if alpha == 0.0:
-        K = np.einsum("mai,mbi->mab", G, G)
+    if _faces_compiled is not None:
+        kappa, dirs, K = _faces_compiled(np.ascontiguousarray(V, dtype=np.float64),
+                                         np.ascontiguousarray(F, dtype=np.int64), float(alpha))
     else:
-        ph = _phi(kappa, alpha)  # (m, 2)
-        Gd = np.einsum("mai,mki->mak", G, dirs)  # gradient components in the principal frame
-        K = np.einsum("mak,mk,mbk->mab", Gd, ph, Gd)
-        # the normal component of each gradient is 0; the in-plane complement of
-        # span(dirs) is empty, so K is the full tensor product
-    K *= area[:, None, None]
+        kappa, dirs, K = _anisotropic_faces_numpy(V, F, alpha)
     r = np.repeat(F, 3, axis=1).ravel()
     c = np.tile(F, (1, 3)).ravel()
     L = sp.csr_matrix((K.ravel(), (r, c)), shape=(n, n))
-    B = _mass(V, F, mass)
+    B = _mass(V, F, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[F.ravel()] = True
     if not referenced.all():
@@ -174,4 +201,4 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     data = {"V": V, "F": F, "weights": "anisotropic", "mass": mass, "alpha": alpha,
             "kappa": kappa, "dirs": dirs, "referenced": referenced}
-    return make_laplacian(L, B, domain="triangle", data=data, adjacency=mesh_components(n, F))
+    return make_laplacian(L, B, domain="triangle", data=data, adjacency=_star_adjacency(n, F))
