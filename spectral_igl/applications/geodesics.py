@@ -16,11 +16,9 @@ _STEPS = ("euler", "intrinsic_delaunay", "engine")
 
 def mean_edge_length(V: np.ndarray, C: np.ndarray) -> float:
     """Mean length of the (unique) edges of a triangle or tetrahedral mesh."""
-    k = C.shape[1]
-    E = np.concatenate([C[:, [a, b]] for a in range(k) for b in range(a + 1, k)])
-    E = np.sort(E, axis=1)
-    key = np.unique(E[:, 0] * np.int64(V.shape[0]) + E[:, 1])
-    E = np.c_[key // V.shape[0], key % V.shape[0]]
+    import igl
+
+    E = igl.edges(np.ascontiguousarray(C))
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
@@ -165,7 +163,6 @@ class HeatGeodesics:
         self.lap, self.step = lap, step
         self.n = lap.n
         self.mollify = float(mollify)
-        self.h = mean_edge_length(V, C)
         if step == "intrinsic_delaunay":
             self.G, self.A, Lp, M, self.h = intrinsic_operators(V, C, mollify=self.mollify)
             self._dim = 2
@@ -177,6 +174,7 @@ class HeatGeodesics:
             self.A = element_measures(V, C)
             Lp = Lh = lap.L
             M = sp.diags(lap.mass).tocsr()
+            self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
         if step == "engine":
             from .. import SpectralOperator, filters
