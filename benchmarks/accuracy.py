@@ -25,7 +25,8 @@ from data_generators import icosphere  # noqa: E402
 from spectral_igl import filters  # noqa: E402
 
 HEAT_SETTINGS = [
-    ("rational", {}), ("rational", {"degree": 6}), ("contour", {}), ("shift_invert", {}),
+    ("rational", {}), ("rational", {"degree": 6}), ("rational", {"degree": 14}), ("contour", {}),
+    ("contour", {"nodes": 32}), ("shift_invert", {}), ("shift_invert", {"steps": 60}),
     ("chebyshev", {}), ("krylov", {"steps": 30}), ("taylor", {}), ("power", {}),
     ("euler", {"steps": 1}), ("euler", {"steps": 10}), ("taylor1", {}),
     ("eigen", {"k": 100}), ("eigen", {"k": 500}),

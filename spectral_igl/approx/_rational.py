@@ -321,6 +321,20 @@ class RationalPlan:
             self.rounding = rounding(pf, a, b, b)
         self.n_solves = (self.pf.n_solves if self.pf is not None else 0) + self.pseudo
 
+    def _solve_bound(self, u, g):
+        r"""Bound of :math:`\|u - \tilde L^+ B^{-1}g\|_B` for a computed pseudo-solve u.
+
+        :math:`\|r\|_{B^{-1}} / \lambda_{\min}^+` with the residual :math:`r = Lu - Pg`, plus
+        the rounding of computing r itself (:math:`\varepsilon(\lambda_{\max}\|u\|_B + \|g\|_{B^{-1}})`).
+        """
+        from ._common import bnorm, inv_bnorm_upper
+
+        lap = self.lap
+        Z = lap.component_basis()
+        r = lap.L @ u - (g - lap.B @ (Z @ (Z.T @ g)))
+        rnd = 64 * EPS * (self.b * bnorm(lap, u) + inv_bnorm_upper(lap, g))
+        return (inv_bnorm_upper(lap, r) + rnd) / self.a
+
     def apply(self, f, rhs):
         """Returns (u, src, scalar): bound = scalar * ||src||_B + (exact-solve residual part)."""
         lap = self.lap
@@ -333,11 +347,7 @@ class RationalPlan:
             for k in range(self.pseudo):
                 rhs_k = u if (rhs and k == 0) else lap.B @ u
                 u = solvers.pseudo_solve(lap, rhs_k, backend=self.backend)
-                Z = lap.component_basis()
-                r = lap.L @ u - (rhs_k - lap.B @ (Z @ (Z.T @ rhs_k)))
-                from ._common import inv_bnorm_upper
-
-                res_bound = res_bound / self.a + inv_bnorm_upper(lap, r) / self.a
+                res_bound = res_bound / self.a + self._solve_bound(u, rhs_k)
             self.residual_bound = res_bound
             return u, src, 0.0
         # a kernel column with a non-diagonal B: rather than a solve with B for alpha0 B^-1 g,
@@ -354,14 +364,10 @@ class RationalPlan:
         v = lap.project_out_kernel(v)
         u = v
         res_bound = 0.0
-        from ._common import inv_bnorm_upper
-
         for _ in range(self.pseudo):
             g = lap.B @ u
             u = solvers.pseudo_solve(lap, g, backend=self.backend)
-            Z = lap.component_basis()
-            r = lap.L @ u - (g - lap.B @ (Z @ (Z.T @ g)))
-            res_bound = res_bound / self.a + inv_bnorm_upper(lap, r) / self.a
+            res_bound = res_bound / self.a + self._solve_bound(u, g)
         self.residual_bound = res_bound
         # the rational error is amplified by ||(L̃⁺)^m|| <= a^-m
         return u, src, scal / self.a ** self.pseudo
