@@ -90,7 +90,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     k, distance, samples : parameters of the diagonal estimator.
     return_info : bool
         Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
-        distance was recomputed exactly as a norm).
+        distance was recomputed exactly as a norm) and, for one-to-all, ``d2_error_bound``
+        (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the diagonal is
+        exact; then :math:`|d - \tilde d| \le` its square root).
 
     Returns
     -------
@@ -161,6 +163,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         op = _operator(lap, filt, method, tol)
         d2[redo] = _pair_norms(lap, op, s, redo, delta)
     info["recomputed"] = redo
+    # |d^2 - d~^2| <= thr for every entry not recomputed (certified when the diagonal is
+    # exact, an estimate from the probing samples otherwise); recomputed entries are norms
+    info["d2_error_bound"] = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
     d = np.sqrt(np.maximum(d2, 0.0))  # every entry is either > thr > 0 or an exact norm
     if targets is not None:
         d = _select(d, targets, n)
