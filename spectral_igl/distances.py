@@ -64,7 +64,8 @@ def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.nda
 
 def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", method: str = "auto",
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
-                      distance: int | None = None, samples: int = 16, return_info: bool = False):
+                      distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
+                      max_colours: int | None = None, return_info: bool = False):
     r"""Spectral distance from ``source`` to ``targets`` (one, many, or all vertices).
 
     .. math:: d(i, j) = \|\varphi(\tilde L) B^{-1}(e_i - e_j)\|_B
@@ -87,7 +88,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         How :math:`G_{jj}` is obtained for one-to-all (see
         :func:`spectral_igl.kernel_diagonal`). ``"eigen"`` returns the classical
         truncated-eigenpair distance with ``k`` pairs (baseline; no error bound).
-    k, distance, samples : parameters of the diagonal estimator.
+    k, distance, samples, rtol, max_colours : parameters of the diagonal estimator
+        (:func:`spectral_igl.kernel_diagonal`).
     return_info : bool
         Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
         distance was recomputed exactly as a norm).
@@ -133,7 +135,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
     col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
-                                  samples=samples, tol=tol, engine_method=method, return_info=True)
+                                  samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
+                                  engine_method=method, return_info=True)
     diag = np.real(diag)
     info.update(dinfo)
     d2 = diag[s] + diag - 2.0 * col
