@@ -33,6 +33,26 @@ from ._common import EPS, sup_error
 
 
 # ----------------------------------------------------------------------------- CF for exp
+def lawson_lstsq(A, y, iterations: int):
+    """Least squares of ``A c ≈ y`` reweighted towards the minimax solution (Lawson).
+
+    Each pass multiplies the weights by the absolute residual; the iterate with the
+    smallest maximum residual is returned as ``(c, max_residual)``. One pass is plain
+    least squares.
+    """
+    wts = np.full(len(y), 1.0 / len(y))
+    best = None
+    for _ in range(int(iterations)):
+        sw = np.sqrt(wts)
+        sol = np.linalg.lstsq(A * sw[:, None], y * sw, rcond=None)[0]
+        e = np.abs(A @ sol - y)
+        if best is None or e.max() < best[1]:
+            best = (sol, float(e.max()))
+        wts = wts * e
+        wts /= wts.sum()
+    return best
+
+
 @lru_cache(maxsize=None)
 def cf_exp(r: int):
     r"""Near-best rational approximation of :math:`e^{-x}` on :math:`[0, \infty)`, type (r, r).
@@ -79,17 +99,7 @@ def cf_exp(r: int):
         cols.append(np.where(fin, 1.0 / (x - z), 0.0).real)
     A = np.array(cols).T
     y = np.where(fin, np.exp(-x), 0.0)
-    wts = np.full(x.size, 1.0 / x.size)
-    best = None
-    for _ in range(25):
-        sw = np.sqrt(wts)
-        sol = np.linalg.lstsq(A * sw[:, None], y * sw, rcond=None)[0]
-        e = np.abs(A @ sol - y)
-        if best is None or e.max() < best[1]:
-            best = (sol, e.max())
-        wts = wts * e
-        wts /= wts.sum()
-    sol, err = best
+    sol, err = lawson_lstsq(A, y, 25)
     alpha0 = float(sol[0])
     m = up.size
     cu = sol[1:1 + 2 * m:2] + 1j * sol[2:2 + 2 * m:2]
@@ -215,17 +225,7 @@ def fit_residues(x, y, poles, real: bool, lawson: int = 0):
     A = np.array(cols).T
     scale = np.max(np.abs(A), axis=0)
     A = A / scale
-    wts = np.full(x.size, 1.0 / x.size)
-    best = None
-    for _ in range(max(1, lawson)):
-        sw = np.sqrt(wts)
-        sol = np.linalg.lstsq(A * sw[:, None], y * sw, rcond=None)[0]
-        e = np.abs(A @ sol - y)
-        if best is None or e.max() < best[1]:
-            best = (sol, e.max())
-        wts = wts * e
-        wts /= wts.sum()
-    sol = best[0] / scale
+    sol = lawson_lstsq(A, y, max(1, lawson))[0] / scale
     if real:
         m = up.size
         cu = sol[1:1 + 2 * m:2] + 1j * sol[2:2 + 2 * m:2]
