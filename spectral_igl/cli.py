@@ -7,8 +7,9 @@ Meshes: ``.obj``, ``.off``, ``.ply``, ``.stl``, ``.wrl`` (triangles) and MEDIT `
 
 Exit codes
 ----------
-0 success; 1 the computation failed; 2 bad command line (unknown option, out-of-range
-vertex, unsupported output type); 3 the input file is missing or unreadable;
+0 success; 1 the computation failed (including an invalid value met inside it); 2 bad
+command line (unknown option, out-of-range vertex, unsupported output type); 3 the input
+file is missing or unreadable, or no Laplacian can be built on it;
 4 an optional dependency is missing (e.g. pictures need ``pip install "spectral_igl[viz]"``).
 """
 from __future__ import annotations
@@ -84,14 +85,26 @@ def _nonnegative_int(text):
     return x
 
 
+def _positive_int(text):
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if x <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return x
+
+
 def _input_args(p, outputs=_OUTPUTS):
     p.add_argument("mesh", nargs="?", metavar="MESH",
                    help="mesh file: .obj .off .ply .stl .wrl (triangles) or .mesh (tetrahedra)")
     p.add_argument("--shape", choices=_SHAPES,
-                   help="use a generated shape instead of a file (sphere: unit icosphere, "
-                        "box: tetrahedral box)")
+                   help="use a generated shape instead of a file: sphere (unit icosphere), "
+                        "torus (R = 1, r = 0.4), cylinder (open, radius 1, height 2), "
+                        "box (tetrahedral box 1 x 0.75 x 0.5)")
     p.add_argument("--level", type=int, default=3,
-                   help="resolution of the generated shape (icosphere subdivisions; default 3)")
+                   help="resolution of the generated shape, 1 to 7 (sphere: icosphere "
+                        "subdivisions, 642 vertices at 3; default 3)")
     p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"),
                    help="Laplacian weights (default cotan: linear FEM)")
     p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"),
@@ -109,10 +122,15 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("-f", "--filter", default=filter_default, choices=_FILTERS, metavar="FILTER",
                    help=f"spectral filter: {', '.join(_FILTERS)} (default {filter_default})")
     p.add_argument("-t", "--time", type=_positive, default=None, help=t_help)
-    p.add_argument("--order", type=int, default=3, help="order k of the polyharmonic filter")
+    p.add_argument("--order", type=_positive_int, default=3,
+                   help="order k of the polyharmonic filter (default 3)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
+    p.add_argument("--diagonal", default="auto", choices=("auto", "exact", "probing", "dense"),
+                   help="distances: how the kernel diagonal is obtained (exact: one application "
+                        "per vertex; probing: colouring estimator; default auto: exact up to "
+                        "3000 vertices)")
 
 
 def build_parser():
@@ -157,6 +175,10 @@ def build_parser():
                    help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
+    p.add_argument("--diagonal", default="auto", choices=("auto", "exact", "probing", "dense"),
+                   help="how the diagonal K_t(i, i) is obtained: exact (one application per "
+                        "vertex), probing (colouring estimator), dense; default auto (exact "
+                        "up to 3000 vertices)")
     p.add_argument("--tol", type=_positive, default=1e-8)
 
     p = sub.add_parser("smooth", help="diffusion smoothing of a signal or of the shape itself",
@@ -171,7 +193,8 @@ def build_parser():
                         "signal's range) -- for demonstrations")
     p.add_argument("--seed", type=int, default=0, help="seed of --noise")
     p.add_argument("-t", "--time", type=_positive, default=None,
-                   help="diffusion time (default: chosen by the L-curve, optimal_time)")
+                   help="diffusion time (default: for --signal, the corner of the L-curve, "
+                        "optimal_time; for the shape itself, the squared mean edge length)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8)
@@ -227,18 +250,17 @@ def _load_shape(args):
     import data_generators as dg
 
     level = int(args.level)
-    if not 0 <= level <= 7:
-        raise CLIError(f"--level must be between 0 and 7, got {level}", EXIT_USAGE)
+    if not 1 <= level <= 7:
+        raise CLIError(f"--level must be between 1 and 7, got {level}", EXIT_USAGE)
     if args.shape == "sphere":
         V, F = dg.icosphere(level)
     elif args.shape == "box":
         k = 2 + 2 * level
         V, F = dg.box_tets((k, max(2, (3 * k) // 4), max(2, k // 2)))
-    else:
-        gen = getattr(dg, args.shape, None)
-        if gen is None:
-            raise CLIError(f"--shape {args.shape} is not available in this version", EXIT_USAGE)
-        V, F = gen()
+    elif args.shape == "torus":
+        V, F = dg.torus(1.0, 0.4, n_major=8 * 2 ** (level - 1) * 3 // 2, n_minor=3 * 2 ** (level - 1))
+    else:  # cylinder
+        V, F = dg.cylinder(1.0, 2.0, n_theta=8 * 2 ** (level - 1) * 3 // 2, n_z=3 * 2 ** (level - 1))
     return V, F, args.shape
 
 
@@ -315,7 +337,7 @@ def _job_kernel_distance(args):
     if FILTERS[args.filter] and t is None:
         t = _default_time(lap)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
-                  order=args.order)
+                  order=args.order, diagonal=args.diagonal)
     prog.step("evaluated")
     kind = "distance" if args.job == "distance" else "cyclic"
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
@@ -341,7 +363,8 @@ def _job_hks(args):
     cols = []
     start = time.perf_counter()
     for t in times:
-        cols.append(np.asarray(hks(lap, [t], method=args.method, tol=args.tol)).reshape(lap.n, -1)[:, 0])
+        cols.append(np.asarray(hks(lap, t, method=args.diagonal, engine_method=args.method,
+                                   tol=args.tol), dtype=float).reshape(lap.n))
         prog.step(f"t={t:.3g}")
     H = np.column_stack(cols)
     seconds = time.perf_counter() - start
@@ -370,33 +393,40 @@ def _read_signal(path, n):
 
 
 def _job_smooth(args):
-    _check_outputs(args.out, _OUTPUTS + (".obj", ".off", ".ply", ".stl"))
+    mesh_types = (".obj", ".off", ".ply", ".stl")
+    _check_outputs(args.out, _OUTPUTS + mesh_types)
+    geometry = args.signal is None
+    if not geometry and any(Path(o).suffix.lower() in mesh_types for o in args.out):
+        raise CLIError("a mesh can only be written when smoothing the shape itself (no --signal)",
+                       EXIT_USAGE)
     V, C, name = _load_shape(args)
-    lap = _laplacian(V, C, args)
-    f = _read_signal(args.signal, len(V)) if args.signal else V.copy()
+    f = _read_signal(args.signal, len(V)) if not geometry else V.copy()
     if args.noise:
         rng = np.random.default_rng(args.seed)
         span = float(np.ptp(f)) or 1.0
         f = f + args.noise * span * rng.standard_normal(f.shape)
+    if geometry:  # smoothing the shape itself: the operator is that of the (noisy) shape
+        V = f.copy()
+    lap = _laplacian(V, C, args)
     from . import diffusion_smooth
 
     t = args.time
-    if t is None:
+    if t is None and geometry:
+        # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
+        # corner is where the shape itself shrinks away; smooth at the scale of an edge
+        E = C[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2) if C.shape[1] == 3 else \
+            C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
+        t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
+    elif t is None:  # the L-curve corner, per column for several columns (their median)
         from . import optimal_time
 
-        t = optimal_time(lap, f)
-        t = float(t[0] if isinstance(t, tuple) else t)
+        cols = f.reshape(lap.n, -1).T
+        t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
     g = np.asarray(diffusion_smooth(lap, f, t, method=args.method, tol=args.tol))
     seconds = time.perf_counter() - start
-    geometry = args.signal is None
-    for out in args.out:
-        ext = Path(out).suffix.lower()
-        if ext in (".obj", ".off", ".ply", ".stl") and not geometry:
-            raise CLIError(f"{out}: a mesh can only be written when smoothing the shape itself",
-                           EXIT_USAGE)
     if geometry:
-        mesh_outs = [o for o in args.out if Path(o).suffix.lower() in (".obj", ".off", ".ply", ".stl")]
+        mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
         _write(mesh_outs, g, V, C, args)
         other = [o for o in args.out if o not in mesh_outs]
         pics = [o for o in other if o.lower().endswith(".png")]
@@ -443,7 +473,8 @@ def _job_view(args):
     t = args.time if args.time is not None else _default_time(lap)
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
-                    source=args.source, tol=args.tol, off_screen=True if off else None)
+                    source=args.source, tol=args.tol, off_screen=True if off else None,
+                    diagonal=args.diagonal)
     if off:
         Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
@@ -530,9 +561,6 @@ def main(argv=None) -> int:
     except ImportError as err:
         print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
         return EXIT_MISSING
-    except (ValueError, TypeError) as err:
-        print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
-        return EXIT_USAGE
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

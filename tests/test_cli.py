@@ -96,16 +96,7 @@ def test_progress_bar_renders():
     assert "100%" in text and "#" * 28 in text and text.endswith("\n")
 
 
-# ---- jobs that need the engine ------------------------------------------------------------
-def _needs(*names):
-    import spectral_igl as sig
-
-    missing = [n for n in names if not hasattr(sig, n)]
-    if missing:
-        pytest.skip(f"spectral_igl.{', '.join(missing)} not available yet")
-    return sig
-
-
+# ---- jobs ------------------------------------------------------------
 def _dense_distance(lap, i, phi2):
     import spectral_igl as sig
 
@@ -114,7 +105,7 @@ def _dense_distance(lap, i, phi2):
 
 
 def test_distance_writes_npy_csv_png(tmp_path, capsys):
-    sig = _needs("spectral_distance", "SpectralOperator")
+    import spectral_igl as sig
     from data_generators import icosphere
 
     from test_viz import assert_not_blank
@@ -136,7 +127,7 @@ def test_distance_writes_npy_csv_png(tmp_path, capsys):
 
 
 def test_kernel_on_mesh_files(tmp_path):
-    sig = _needs("SpectralOperator")
+    import spectral_igl as sig
     from data_generators import box_tets, icosphere
 
     from spectral_igl.io import write_mesh
@@ -162,11 +153,148 @@ def test_kernel_on_mesh_files(tmp_path):
 
 
 def test_view_screenshot(tmp_path):
-    _needs("SpectralOperator", "spectral_distance")
-    pytest.importorskip("pyvista")
     from test_viz import assert_not_blank
 
     png = tmp_path / "view.png"
     assert main(["view", "--shape", "sphere", "--level", "2", "--source", "4",
                  "--screenshot", str(png), "-q"]) == EXIT_OK
     assert_not_blank(png)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_blas_thread():
+    """Small dense factorizations run faster on one BLAS thread (and far faster on a busy machine)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # only a matter of speed
+        yield
+        return
+    with threadpool_limits(1):
+        yield
+
+
+def _dense(lap):
+    import spectral_igl as sig
+
+    return sig.dense_eigs(lap)
+
+
+def test_generated_shapes_torus_cylinder(tmp_path):
+    import data_generators as dg
+
+    import spectral_igl as sig
+
+    for shape, (V, F) in (("torus", dg.torus(1.0, 0.4, n_major=24, n_minor=6)),
+                          ("cylinder", dg.cylinder(1.0, 2.0, n_theta=24, n_z=6))):
+        out = tmp_path / f"{shape}.npy"
+        assert main(["distance", "--shape", shape, "--level", "2", "--source", "3",
+                     "--out", str(out), "-q"]) == EXIT_OK
+        d = np.load(out)
+        lap = sig.laplacian(V, F)  # --level 2 is this resolution
+        phi2 = lambda s: np.where(s > 1e-9, 1.0 / np.maximum(s, 1e-9) ** 2, 0.0)  # noqa: E731
+        truth = _dense_distance(lap, 3, phi2)
+        assert d.shape == (lap.n,) and d[3] == 0.0
+        assert np.max(np.abs(d - truth)) < 1e-6 * truth.max(), shape
+
+
+def test_hks_against_dense(tmp_path, capsys):
+    from data_generators import icosphere
+
+    import spectral_igl as sig
+
+    out, png = tmp_path / "h.npy", tmp_path / "h.png"
+    assert main(["hks", "--shape", "sphere", "--level", "2", "--times", "0.01", "0.1",
+                 "--out", str(out), "--out", str(png)]) == EXIT_OK
+    H = np.load(out)
+    evals, X = _dense(sig.laplacian(*icosphere(2)))
+    truth = (X ** 2) @ np.exp(-np.outer(evals, [0.01, 0.1]))
+    assert H.shape == truth.shape == (162, 2)
+    assert np.max(np.abs(H - truth)) < 1e-7 * truth.max()
+    from test_viz import assert_not_blank
+
+    assert_not_blank(png)
+    assert "hks at 2 times" in capsys.readouterr().out
+
+
+def test_smooth_signal_and_shape(tmp_path, capsys):
+    from data_generators import icosphere
+
+    import spectral_igl as sig
+    from spectral_igl.io import read_mesh
+
+    V, F = icosphere(2)
+    rng = np.random.default_rng(0)
+    f = V[:, 2] + 0.1 * rng.standard_normal(len(V))
+    sig_path, out = tmp_path / "f.csv", tmp_path / "g.npy"
+    np.savetxt(sig_path, f, delimiter=",")
+    assert main(["smooth", "--shape", "sphere", "--level", "2", "--signal", str(sig_path),
+                 "-t", "0.05", "--out", str(out), "-q"]) == EXIT_OK
+    lap = sig.laplacian(V, F)
+    evals, X = _dense(lap)
+    truth = X @ (np.exp(-0.05 * evals) * (X.T @ (lap.B @ f)))
+    assert np.max(np.abs(np.load(out) - truth)) < 1e-7
+    # a mesh output needs the shape itself as the signal
+    assert main(["smooth", "--shape", "sphere", "--signal", str(sig_path), "--out",
+                 str(tmp_path / "s.obj")]) == EXIT_USAGE
+    assert "mesh can only be written" in capsys.readouterr().err
+    # the noisy shape, smoothed at the default time (squared mean edge length): rounder
+    obj, png = tmp_path / "smooth.obj", tmp_path / "smooth.png"
+    assert main(["smooth", "--shape", "sphere", "--level", "3", "--noise", "0.01",
+                 "--out", str(obj), "--out", str(png)]) == EXIT_OK
+    printed = capsys.readouterr().out
+    assert "diffusion smoothing on sphere (642 vertices) at t=" in printed
+    W, G = read_mesh(obj)
+    V3, F3 = icosphere(3)
+    noisy = V3 + 0.01 * 2.0 * np.random.default_rng(0).standard_normal(V3.shape)
+    assert np.array_equal(G, F3)
+    spread = lambda P: float(np.std(np.linalg.norm(P - P.mean(0), axis=1)))  # noqa: E731
+    assert spread(W) < 0.5 * spread(noisy)  # rounder than the noisy input
+
+
+def test_geodesic_on_the_sphere(tmp_path, capsys):
+    from data_generators import icosphere
+
+    out, png = tmp_path / "g.npy", tmp_path / "g.png"
+    assert main(["geodesic", "--shape", "sphere", "--level", "3", "--source", "0",
+                 "--out", str(out), "--out", str(png)]) == EXIT_OK
+    V, _ = icosphere(3)
+    arc = np.arccos(np.clip(V @ V[0], -1, 1))
+    assert np.max(np.abs(np.load(out) - arc)) < 0.03 * np.pi  # heat method, 642 vertices
+    from test_viz import assert_not_blank
+
+    assert_not_blank(png)
+    assert "geodesic distance (heat)" in capsys.readouterr().out
+
+
+def test_computation_errors_exit_1(capsys):
+    from spectral_igl.cli import EXIT_ERROR
+
+    # backward Euler approximates the heat filter only: the engine refuses the wave filter
+    assert main(["kernel", "--shape", "sphere", "--level", "1", "--filter", "wave", "-t", "0.1",
+                 "--method", "euler"]) == EXIT_ERROR
+    err = capsys.readouterr().err
+    assert "failed" in err and "heat filter only" in err and "Traceback" not in err
+
+
+def test_real_meshes(shared_meshes, tmp_path):
+    """Triangle meshes with one and several components, and a tetrahedral mesh."""
+    from spectral_igl.io import read_mesh
+
+    from test_viz import assert_not_blank
+
+    # several components: distances stay finite, zero at the source only
+    out, png = tmp_path / "suzanne.npy", tmp_path / "suzanne.png"
+    assert main(["distance", str(shared_meshes / "suzanne.obj"), "--source", "10",
+                 "--out", str(out), "--out", str(png), "-q"]) == EXIT_OK
+    d = np.load(out)
+    assert d.shape == (len(read_mesh(shared_meshes / "suzanne.obj")[0]),)
+    assert np.all(np.isfinite(d)) and d[10] == 0.0 and np.delete(d, 10).min() > 0
+    assert_not_blank(png)
+    # tetrahedral mesh: heat is conserved
+    out = tmp_path / "bunny.npy"
+    assert main(["kernel", str(shared_meshes / "bunny.mesh"), "--source", "0", "--out", str(out),
+                 "-q"]) == EXIT_OK
+    import spectral_igl as sig
+
+    lap = sig.laplacian(*read_mesh(shared_meshes / "bunny.mesh"))
+    assert np.load(out) @ (lap.B @ np.ones(lap.n)) == pytest.approx(1.0, abs=1e-7)

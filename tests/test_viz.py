@@ -7,8 +7,6 @@ import sys
 import numpy as np
 import pytest
 
-pv = pytest.importorskip("pyvista")
-pytest.importorskip("matplotlib")
 
 from spectral_igl.viz import colormap, levelset_values, plot_levelsets  # noqa: E402
 
@@ -33,6 +31,18 @@ def assert_not_blank(path, min_std=10.0, min_colors=50):
 def colour_fraction(img, rgb, tol=60):
     d = np.abs(img.astype(int) - np.array(rgb)[None, None, :]).max(axis=2)
     return float(np.mean(d < tol))
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_blas_thread():
+    """Small dense factorizations run faster on one BLAS thread (and far faster on a busy machine)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # only a matter of speed
+        yield
+        return
+    with threadpool_limits(1):
+        yield
 
 
 @pytest.fixture(scope="module")
@@ -182,19 +192,9 @@ def test_bad_input_is_rejected(sphere):
 
 
 # ---- the interactive viewer, driven off screen ---------------------------------------------
-def _engine():
-    import spectral_igl as sig
-
-    if not hasattr(sig, "SpectralOperator"):
-        pytest.skip("spectral_igl.SpectralOperator (the engine) is not available yet")
-    if not hasattr(sig, "spectral_distance"):
-        pytest.skip("spectral_igl.spectral_distance is not available yet")
-    return sig
-
-
 @pytest.fixture
 def viewer():
-    sig = _engine()
+    import spectral_igl as sig
     from data_generators import icosphere
 
     from spectral_igl.viz import Viewer

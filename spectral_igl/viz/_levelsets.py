@@ -54,7 +54,7 @@ def _critical_sets(critical):
 def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_scale=True,
                    sources=None, critical=None, volume="clip", title=None, labels=None,
                    plotter=None, filename=None, off_screen=None, window_size=None,
-                   camera_position=None, zoom=1.2, source_color="black", scalar_bar=True, line_width=2.0,
+                   camera_position=None, zoom=None, source_color="black", scalar_bar=True, line_width=2.0,
                    point_size=None, show_edges=False, background="white"):
     r"""Draw a scalar function on a shape with iso-lines at uniformly sampled values.
 
@@ -101,8 +101,9 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
     camera_position : str or list, optional
         A pyvista camera position (``"iso"``, ``"xy"``, ...). Default: facing the first
         source when ``sources`` is given, else ``"iso"``.
-    zoom : float
-        Camera zoom after fitting the shape.
+    zoom : float, optional
+        Camera zoom after fitting the shape; default 1.2 for surfaces and point sets,
+        1.0 for volumes (whose bounding box fills the picture).
     source_color : str
         Colour of the source dots.
 
@@ -119,6 +120,7 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
     >>> p = plot_levelsets((V, F), V[:, 2], kind="cyclic", filename="z.png")  # doctest: +SKIP
     """
     pv = pyvista()
+    _lines_over_surfaces()
     shapes = shape if isinstance(shape, list) else [shape]
     fs = f if isinstance(f, list) else [f]
     if len(shapes) != len(fs):
@@ -219,14 +221,27 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         else:
             plotter.camera_position = "iso"
         plotter.reset_camera()
-        if zoom != 1.0:
-            plotter.camera.zoom(zoom)
+        z = zoom if zoom is not None else (1.0 if mkind == "tet" else 1.2)
+        if z != 1.0:
+            plotter.camera.zoom(z)
 
     if filename is not None:
         image = plotter.screenshot(return_img=True)
         plotter.close()
         save_png(image, filename)
     return plotter
+
+
+def _lines_over_surfaces():
+    """Draw iso-lines on top of the surface they lie on (no z-fighting).
+
+    The contour lines are coincident with the triangles; VTK's polygon offset pushes the
+    filled polygons slightly back in depth so that the lines always win. (A process-wide
+    VTK setting; it only affects coincident geometry.)
+    """
+    from vtkmodules.vtkRenderingCore import vtkMapper
+
+    vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
 
 
 def _look_at(plotter, mesh, vertex):

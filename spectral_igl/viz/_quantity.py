@@ -76,7 +76,8 @@ def _bound(x):
 
 
 def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | None = None,
-             method: str = "auto", tol: float = 1e-8, order: int = 3) -> Evaluation:
+             method: str = "auto", tol: float = 1e-8, order: int = 3,
+             diagonal: str = "auto") -> Evaluation:
     r"""Kernel column or distance from one vertex.
 
     Parameters
@@ -93,12 +94,16 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         Time/scale of the filters that take one.
     method, tol
         Passed to the spectrum-free engine.
+    diagonal : {"auto", "exact", "probing", "dense"}
+        How a one-to-all distance obtains the kernel diagonal
+        (:func:`spectral_igl.spectral_distance`).
 
     Returns
     -------
     Evaluation
         ``values`` (n,) float (the real part for the complex wave filter), ``error_bound``
-        (certified, absolute, in the B-norm; ``None`` when the method gives none),
+        (absolute: in the B-norm for a kernel column, the largest bound on
+        :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
         ``seconds``.
     """
     from .._validate import as_index
@@ -121,15 +126,23 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     else:
         from .. import spectral_distance
 
-        values, bound = _distance(spectral_distance, lap, filt, source, method, tol)
+        values, bound = _distance(spectral_distance, lap, filt, source, method, tol, diagonal)
     seconds = time.perf_counter() - start
     return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label)
 
 
-def _distance(spectral_distance, lap, filt, source, method, tol):
-    out = spectral_distance(lap, filt, source, method=method, tol=tol)
-    bound = None
-    if isinstance(out, tuple):
-        out, bound = out[0], out[1]
-    bound = _bound(getattr(out, "error_bound", bound))
-    return np.asarray(out), bound
+def _distance(spectral_distance, lap, filt, source, method, tol, diagonal="auto"):
+    """Distances from ``source`` and a bound on each |d - d~| (``None`` when there is none).
+
+    For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``
+    with ``e`` the bound on the squared distances.
+    """
+    out, info = spectral_distance(lap, filt, source, method=method, tol=tol, diagonal=diagonal,
+                                  return_info=True)
+    out = np.asarray(out)
+    e = info.get("d2_error_bound")
+    if e is None or not np.isfinite(e):
+        return out, None
+    d = np.delete(np.abs(out), source)
+    per = np.minimum(np.sqrt(e), e / np.maximum(d, np.finfo(float).tiny))
+    return out, float(per.max(initial=0.0))

@@ -44,6 +44,8 @@ class Viewer:
         Number of iso-lines.
     off_screen : bool, optional
         Default: off screen when there is no display.
+    diagonal : {"auto", "exact", "probing", "dense"}
+        How distances obtain the kernel diagonal (see :func:`spectral_igl.spectral_distance`).
 
     Examples
     --------
@@ -54,9 +56,12 @@ class Viewer:
 
     def __init__(self, shape, quantity="distance", filter="biharmonic", t=None, method="auto",
                  source=0, n_levels=12, tol=1e-8, off_screen=None, window_size=(900, 800),
-                 weights="cotan"):
+                 weights="cotan", diagonal="auto"):
         pv = pyvista()
         from .. import Laplacian, laplacian
+        from ._levelsets import _lines_over_surfaces
+
+        _lines_over_surfaces()
 
         if quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
@@ -85,6 +90,7 @@ class Viewer:
         self.filter = filter
         self.method = method
         self.tol = float(tol)
+        self.diagonal = diagonal
         self.n_levels = int(n_levels)
         diag2 = float(np.sum((self.points.max(0) - self.points.min(0)) ** 2))
         self.t = float(t) if t is not None else 1e-2 * diag2
@@ -181,7 +187,7 @@ class Viewer:
     def update(self):
         """Recompute the scalar for the current settings and refresh actors and text."""
         ev = evaluate(self.lap, self.quantity, self.source, self.filter, self.t,
-                      method=self.method, tol=self.tol)
+                      method=self.method, tol=self.tol, diagonal=self.diagonal)
         self.last = ev
         self.evaluations += 1
         f = ev.values[self._ids]
