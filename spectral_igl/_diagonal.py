@@ -8,7 +8,10 @@ of any single solve. Methods:
     n applications of the engine (in blocks): exact up to the engine's certified bound.
     For small and moderate n.
 ``"dense"``
-    Dense generalized eigen-decomposition (n <= 8000): the ground truth.
+    Dense generalized eigen-decomposition (n <= 8000): the ground truth. The
+    decomposition is cached on the Laplacian, so further filters and times cost one
+    matrix product each. ``"auto"`` uses it for n <= 3000, where it is faster than n
+    engine applications (n = 2562: 18 s once, against 37 s per filter for ``"exact"``).
 ``"eigen"``
     Truncated eigen-expansion with the ``k`` lowest eigenpairs: the classical baseline.
     No error bound; wrong by the whole omitted tail of the spectrum.
@@ -213,7 +216,8 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         The filter whose kernel diagonal is wanted (for spectral distances pass
         :math:`|\varphi|^2`, see :func:`spectral_igl.kernels.abs_square`).
     method : {"auto", "exact", "probing", "eigen", "dense"}
-        See the module notes. ``"auto"``: ``"exact"`` for ``n <= 3000``, else ``"probing"``.
+        See the module notes. ``"auto"``: ``"dense"`` (cached) for ``n <= 3000``, else
+        ``"probing"``.
     delta : {"mass", "seed"}
         ``"seed"`` gives the diagonal of :math:`B\varphi(\tilde L)` (the seed-delta Gram
         matrix).
@@ -258,13 +262,15 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     n, c = lap.n, lap.n_components
     if method == "auto":
-        method = "exact" if n <= EXACT_MAX else "probing"
+        method = "dense" if n <= EXACT_MAX else "probing"
     info = {"method": method, "applications": 0, "k": 0, "distance": None, "colours": None}
     cplx = bool(getattr(filt, "is_complex", False))
     dtype = np.complex128 if cplx else np.float64
 
     if method == "dense":
-        lam, X = dense_eigs(lap)
+        if "dense_eigs" not in lap.cache:
+            lap.cache["dense_eigs"] = dense_eigs(lap)
+        lam, X = lap.cache["dense_eigs"]
         W = X if delta == "mass" else np.asarray(lap.B @ X)
         diag = (W ** 2) @ _phi_values(filt, lam, c)
         info["k"] = n
