@@ -49,7 +49,7 @@ __all__ += [
 
 # --- applications ---
 from .applications import (  # noqa: E402
-    CriticalPoints, HeatGeodesics, auto_diffusion, critical_points, diffusion_basis,
+    CriticalPoints, HeatGeodesics, critical_points, diffusion_basis,
     diffusion_smooth, feature_points, geodesic_distance, harmonic, optimal_time, schrodinger,
     smooth, smooth_constrained, varadhan_distance, wasserstein_distance,
 )
@@ -58,6 +58,6 @@ __all__ += [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "diffusion_basis", "feature_points",
-    "auto_diffusion", "schrodinger",
+    "schrodinger",
 ]
 # --- end applications ---

@@ -28,8 +28,9 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     lap : Laplacian
     filt : Filter
     method : str
-        Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: exact
-        for n <= 3000, else the probing estimator with measured accuracy).
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: exact, by a
+        cached dense eigendecomposition, for n <= 3000, else the probing estimator with
+        measured accuracy).
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal` (``k``, ``distance``,
         ``return_info``, ...).

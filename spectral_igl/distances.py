@@ -64,7 +64,9 @@ def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.nda
 
 def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", method: str = "auto",
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
-                      distance: int | None = None, samples: int = 16, return_info: bool = False):
+                      distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
+                      max_colours: int | None = None, max_recompute: int | None = None,
+                      return_info: bool = False):
     r"""Spectral distance from ``source`` to ``targets`` (one, many, or all vertices).
 
     .. math:: d(i, j) = \|\varphi(\tilde L) B^{-1}(e_i - e_j)\|_B
@@ -87,12 +89,18 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         How :math:`G_{jj}` is obtained for one-to-all (see
         :func:`spectral_igl.kernel_diagonal`). ``"eigen"`` returns the classical
         truncated-eigenpair distance with ``k`` pairs (baseline; no error bound).
-    k, distance, samples : parameters of the diagonal estimator.
+    k, distance, samples, rtol, max_colours : parameters of the diagonal estimator
+        (:func:`spectral_igl.kernel_diagonal`).
+    max_recompute : int, optional
+        One-to-all: at most this many targets (the smallest estimates first) whose
+        squared distance is within the diagonal's error of 0 are recomputed exactly
+        (one engine application each); the others keep the estimate, clipped at 0, and
+        are listed in ``info["unverified"]``. Default: all of them.
     return_info : bool
         Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
-        distance was recomputed exactly as a norm) and, for one-to-all, ``d2_error_bound``
-        (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the diagonal is
-        exact; then :math:`|d - \tilde d| \le` its square root).
+        distance was recomputed exactly as a norm), ``unverified`` and, for one-to-all,
+        ``d2_error_bound`` (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the
+        diagonal is exact; then :math:`|d - \tilde d| \le` its square root).
 
     Returns
     -------
@@ -135,7 +143,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
     col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
-                                  samples=samples, tol=tol, engine_method=method, return_info=True)
+                                  samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
+                                  engine_method=method, return_info=True)
     diag = np.real(diag)
     info.update(dinfo)
     d2 = diag[s] + diag - 2.0 * col
@@ -155,7 +164,11 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     thr = 2.0 * derr + 2.0 * cerr + 64.0 * np.finfo(float).eps * scale
     redo = np.flatnonzero(d2 <= thr)
     redo = redo[redo != s]
-    if redo.size > 1024:
+    unverified = redo[:0]
+    if max_recompute is not None and redo.size > int(max_recompute):
+        order = np.argsort(d2[redo], kind="stable")
+        redo, unverified = np.sort(redo[order[:int(max_recompute)]]), np.sort(redo[order[int(max_recompute):]])
+    elif redo.size > 1024:
         warnings.warn(f"{redo.size} one-to-all distances were within the diagonal's error of 0 and "
                       "are recomputed exactly; a more accurate diagonal (method='exact') is cheaper",
                       RuntimeWarning, stacklevel=2)
@@ -166,6 +179,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     # |d^2 - d~^2| <= thr for every entry not recomputed (certified when the diagonal is
     # exact, an estimate from the probing samples otherwise); recomputed entries are norms
     info["d2_error_bound"] = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
+    info["unverified"] = unverified
     d = np.sqrt(np.maximum(d2, 0.0))  # every entry is either > thr > 0 or an exact norm
     if targets is not None:
         d = _select(d, targets, n)

@@ -101,33 +101,61 @@ def test_diffusion_smooth_matches_dense():
         assert np.sqrt((g - expected) @ (lap.B @ (g - expected))) < 1e-6 * np.sqrt(f @ (lap.B @ f))
 
 
-def test_optimal_time_beats_a_decade_either_side():
-    pytest.importorskip("spectral_igl.filters")
+def _sphere_signal(V, degree):
+    x, y, z = V.T
+    return {1: x, 2: x + 0.5 * y * z, 3: 5 * x * y * z + z, 5: 3 * np.real((x + 1j * y) ** 5) + x}[degree]
+
+
+def _box_signal(V, k):
+    x, y, z = V.T
+    return np.cos(k * np.pi * x) * np.cos(np.pi * z) + np.cos(np.pi * y)
+
+
+def _decade_check(lap, clean, noise, seed, **kw):
+    """The chosen t beats t/10 and 10 t on the error to the clean signal (exact heat)."""
     from spectral_igl.applications import diffusion_smooth, optimal_time
 
-    V, F = icosphere(4)
-    lap = sig.laplacian(V, F)
-    clean = V[:, 0] + 0.5 * V[:, 1] * V[:, 2]
-    f = clean + 0.1 * np.random.default_rng(0).standard_normal(lap.n)
-    t, curve = optimal_time(lap, f)
-    assert set(curve) == {"t", "residual", "energy", "curvature"}
-    assert np.all(np.diff(curve["residual"]) > 0) and np.all(np.diff(curve["energy"]) < 0)
+    rms = np.sqrt(clean @ (lap.B @ clean) / lap.area())
+    f = clean + noise * rms * np.random.default_rng(seed).standard_normal(lap.n)
+    t, curve = optimal_time(lap, f, **kw)
     err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
     e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
-    assert e[1] < e[0] and e[1] < e[2]
-    assert e[1] < 0.5 * err(f)
+    assert e[1] < e[0] and e[1] < e[2], (t, e)
+    assert e[1] < err(f)
+    return t, curve, f
 
 
-def test_volume_diffusion_smoothing_with_optimal_time():
+@pytest.mark.parametrize("degree, noise", [(1, 0.1), (1, 0.3), (1, 1.0), (3, 0.1), (3, 0.3),
+                                           (3, 1.0), (5, 0.3), (5, 1.0)])
+def test_optimal_time_beats_a_decade_either_side_sphere(degree, noise):
+    pytest.importorskip("spectral_igl.filters")
+    V, F = icosphere(3)
+    lap = sig.laplacian(V, F, mass="lumped")
+    t, curve, f = _decade_check(lap, _sphere_signal(V, degree), noise, seed=degree)
+    # the fitted noise level is the one added (per-vertex standard deviation)
+    rms = np.sqrt(_sphere_signal(V, degree) @ (lap.B @ _sphere_signal(V, degree)) / lap.area())
+    assert curve["noise"] == pytest.approx(noise * rms, rel=0.1)
+
+
+@pytest.mark.parametrize("k, noise", [(1, 0.1), (1, 0.3), (1, 1.0), (3, 0.1), (3, 0.3), (3, 1.0)])
+def test_optimal_time_beats_a_decade_either_side_tets(k, noise):
     pytest.importorskip("spectral_igl.filters")
     from data_generators import box_tets
-    from spectral_igl.applications import diffusion_smooth, optimal_time
 
-    V, T = box_tets((8, 8, 8), (1.0, 1.0, 1.0))
-    lap = sig.laplacian(V, T)
-    clean = np.cos(np.pi * V[:, 0]) + 0.5 * np.cos(np.pi * V[:, 1])
-    f = clean + 0.2 * np.random.default_rng(1).standard_normal(lap.n)
-    t, _ = optimal_time(lap, f, n_times=32)
-    err = lambda u: np.sqrt((u - clean) @ (lap.B @ (u - clean)))  # noqa: E731
-    e = [err(diffusion_smooth(lap, f, s)) for s in (t / 10, t, 10 * t)]
-    assert e[1] < e[0] and e[1] < e[2]
+    V, T = box_tets((9, 9, 9), (1.0, 1.0, 1.0))
+    lap = sig.laplacian(V, T, mass="lumped")
+    _decade_check(lap, _box_signal(V, k), noise, seed=k)
+
+
+def test_optimal_time_full_mass_and_curve():
+    pytest.importorskip("spectral_igl.filters")
+    V, F = icosphere(3)
+    lap = sig.laplacian(V, F)
+    t, curve, _ = _decade_check(lap, _sphere_signal(V, 2), 0.3, seed=0)
+    assert set(curve) == {"t", "residual", "energy", "curvature", "risk", "noise"}
+    assert np.all(np.diff(curve["residual"]) > 0) and np.all(np.diff(curve["energy"]) < 0)
+    assert curve["t"][np.nanargmin(curve["risk"])] == t
+    t_l, curve_l = sig.optimal_time(lap, _sphere_signal(V, 2), rule="lcurve")
+    assert np.all(np.isnan(curve_l["risk"]))
+    with pytest.raises(ValueError, match="rule"):
+        sig.optimal_time(lap, _sphere_signal(V, 2), rule="gcv")

@@ -1,6 +1,6 @@
 """Applications built on the engine: harmonic functions and critical points, smoothing,
 time-scale selection, geodesic and transport distances, basis functions, waves."""
-from .basis import auto_diffusion, diffusion_basis, feature_points, graph_extrema
+from .basis import diffusion_basis, feature_points, graph_extrema
 from .critical_points import CriticalPoints, critical_points
 from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
 from .harmonic import harmonic
@@ -14,6 +14,6 @@ __all__ = [
     "smooth", "smooth_constrained", "diffusion_smooth", "optimal_time",
     "HeatGeodesics", "geodesic_distance", "varadhan_distance",
     "sinkhorn", "wasserstein_distance",
-    "diffusion_basis", "feature_points", "auto_diffusion", "graph_extrema",
+    "diffusion_basis", "feature_points", "graph_extrema",
     "schrodinger",
 ]

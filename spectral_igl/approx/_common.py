@@ -133,33 +133,38 @@ def sample_grid(a: float, b: float, n: int = 6000) -> np.ndarray:
     return x[(x >= a) & (x <= b)]
 
 
-def sup_error(err, a: float, b: float, n: int = 6000, rounds: int = 8, safety: float = 2.0) -> float:
+def sup_error(err, a: float, b: float, n: int = 6000, rounds: int = 8, safety: float = 2.0,
+              scale: float | None = None, max_points: int = 200_000) -> float:
     r"""Upper bound of :math:`\max_{x \in [a, b]} |e(x)|` from a refined sample.
 
     ``err(x)`` evaluates the error on an array. The sample (linear, geometric and
     Chebyshev points, about 3n) is bisected wherever the error changes by more than 5% of
-    its maximum between neighbours, until it is resolved; then
-    :math:`\max_i (\max(|e_i|, |e_{i+1}|) + |e_{i+1} - e_i|)` is multiplied by ``safety``.
-    The error functions met here (differences of analytic functions and rational or
-    polynomial approximants) are smooth on the scale of a resolved grid, so the factor 2
-    covers what lies between samples; the tests check the result against dense ground
-    truth on many shapes and filters.
+    its maximum between neighbours (variations below the rounding level
+    :math:`10^3 \varepsilon \cdot` ``scale`` are ignored), until it is resolved; then
+    :math:`\max_i (\max(|e_i|, |e_{i+1}|) + |e_{i+1} - e_i|)` plus the rounding level is
+    multiplied by ``safety``. The error functions met here (differences of analytic
+    functions and rational or polynomial approximants) are smooth on the scale of a resolved
+    grid, so the factor 2 covers what lies between samples; the tests check the result
+    against dense ground truth on many shapes and filters.
     """
     x = sample_grid(a, b, n)
+    floor = 0.0
     for it in range(rounds + 1):
         with np.errstate(all="ignore"):
             e = np.abs(err(x))
         if not np.all(np.isfinite(e)):
             return np.inf
+        if it == 0:
+            floor = 1e3 * EPS * (scale if scale is not None else 1.0)
         de = np.abs(np.diff(e))
         bound = np.maximum(e[:-1], e[1:]) + de
         top = float(np.max(e))
-        bad = de > 0.05 * max(top, 1e-300)
-        if not np.any(bad) or it == rounds or x.size > 1_000_000:
-            return safety * float(np.max(bound))
+        bad = de > max(0.05 * top, floor)
+        if not np.any(bad) or it == rounds or x.size > max_points:
+            break
         x0, x1 = x[:-1][bad], x[1:][bad]
         x = np.unique(np.concatenate([x, x0 + 0.25 * (x1 - x0), x0 + 0.5 * (x1 - x0), x0 + 0.75 * (x1 - x0)]))
-    return safety * float(np.max(bound))
+    return safety * (float(np.max(bound)) + floor)
 
 
 # ----------------------------------------------------------------------------- Chebyshev

@@ -36,7 +36,7 @@ class ContourPlan:
         for N in Ns:
             z, w = talbot(N)
             pf = PartialFractions(0.0, w, -z, sigma=t)
-            err = sup_error(lambda s: filt(s) - pf(s), a, b)
+            err = sup_error(lambda s: filt(s) - pf(s), a, b, scale=1.0)
             rnd = rounding(pf, a, b, b)
             if err + rnd <= tol:
                 break

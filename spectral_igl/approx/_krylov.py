@@ -45,45 +45,48 @@ def _cheb_steps(g, lo, hi, tol, max_steps):
 def lanczos(op, f, Bf, m, lap):
     """Batched B-Lanczos with full reorthogonalisation, columns of f independent.
 
-    Returns (alpha (m, k), beta (m, k), Q (m, n, k), beta0 (k,), m_eff (k,)).
+    ``f``, ``Bf``: (n, k). ``op`` maps (n,) or (n, k) arrays. Returns
+    (alpha (m, k), beta (m, k), Q (k, m, n), beta0 (k,), m_eff (k,)).
     """
-    k = f.shape[1]
+    n, k = f.shape
+    dt = np.result_type(f, Bf, float)
     beta0 = np.sqrt(np.maximum(np.real(np.sum(np.conj(f) * Bf, axis=0)), 0.0))
     safe = np.where(beta0 > 0, beta0, 1.0)
-    q = f / safe
-    Bq = Bf / safe
-    Q, BQ = [q], [Bq]
+    Q = np.zeros((k, m, n), dtype=dt)
+    BQ = np.zeros((k, m, n), dtype=dt)
+    Q[:, 0] = (f / safe).T
+    BQ[:, 0] = (Bf / safe).T
     alpha = np.zeros((m, k))
     beta = np.zeros((m, k))
     m_eff = np.where(beta0 > 0, m, 0)
     alive = beta0 > 0
     for j in range(m):
-        w = op(q)
-        a = np.real(np.sum(np.conj(Bq) * w, axis=0))
+        q = Q[:, j]
+        w = op(q[0]) if k == 1 else op(np.ascontiguousarray(q.T))
+        w = np.atleast_2d(np.asarray(w).T).astype(dt, copy=False) if k == 1 else np.ascontiguousarray(w.T)
+        w = w.reshape(k, n)
+        a = np.real(np.sum(np.conj(BQ[:, j]) * w, axis=1))
         alpha[j] = np.where(alive, a, 0.0)
         for _ in range(2):  # full reorthogonalisation in the B-inner product, twice
-            for qi, Bqi in zip(Q, BQ):
-                h = np.sum(np.conj(Bqi) * w, axis=0)
-                w = w - qi * h
-        Bw = lap.B @ w
-        b = np.sqrt(np.maximum(np.real(np.sum(np.conj(w) * Bw, axis=0)), 0.0))
+            h = np.matmul(np.conj(BQ[:, : j + 1]), w[:, :, None])  # (k, j+1, 1)
+            w = w - np.matmul(Q[:, : j + 1].transpose(0, 2, 1), h)[:, :, 0]
+        Bw = (lap.B @ w.T).T
+        b = np.sqrt(np.maximum(np.real(np.sum(np.conj(w) * Bw, axis=1)), 0.0))
         dead = alive & (b <= 1e-13 * np.maximum(np.abs(alpha[: j + 1]).max(axis=0), 1e-300))
         m_eff = np.where(dead, j + 1, m_eff)
         alive = alive & ~dead
         beta[j] = np.where(alive, b, 0.0)
         if j + 1 == m or not alive.any():
             break
-        sb = np.where(alive, b, 1.0)
-        q = np.where(alive, w / sb, 0.0)
-        Bq = np.where(alive, Bw / sb, 0.0)
-        Q.append(q)
-        BQ.append(Bq)
+        sb = np.where(alive, b, 1.0)[:, None]
+        Q[:, j + 1] = np.where(alive[:, None], w / sb, 0.0)
+        BQ[:, j + 1] = np.where(alive[:, None], Bw / sb, 0.0)
     return alpha, beta, Q, beta0, m_eff
 
 
 def lanczos_eval(g, alpha, beta, Q, beta0, m_eff, lo, hi, is_complex):
     k = alpha.shape[1]
-    n = Q[0].shape[0]
+    n = Q.shape[2]
     out = np.zeros((n, k), dtype=complex if is_complex else float)
     for c in range(k):
         mc = int(m_eff[c])
@@ -95,9 +98,7 @@ def lanczos_eval(g, alpha, beta, Q, beta0, m_eff, lo, hi, is_complex):
         else:
             th, S = sla.eigh_tridiagonal(d, e)
         y = S @ (g(np.clip(th, lo, hi)) * S[0, :])
-        for i in range(mc):
-            out[:, c] += Q[i][:, c] * y[i]
-        out[:, c] *= beta0[c]
+        out[:, c] = beta0[c] * (Q[c, :mc].T @ y)
     return out
 
 

@@ -156,7 +156,7 @@ class EulerPlan:
         def r(s):
             return (1.0 + t * s / m) ** (-m)
 
-        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - r(s), a, b)
+        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - r(s), a, b, scale=1.0)
         self.rounding = 16 * EPS * m
         self.n_solves = m
 
@@ -175,7 +175,7 @@ class Taylor1Plan:
     def __init__(self, lap, filt, a, b, tol, backend="auto"):
         t = filt.params["t"]
         self.lap, self.t, self.backend = lap, t, backend
-        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - (1.0 - t * s), a, b)
+        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - (1.0 - t * s), a, b, scale=1.0)
         self.rounding = 8 * EPS * (1 + t * b)
         self.n_solves = 1
 
@@ -216,7 +216,7 @@ class PowerPlan:
                     return np.polynomial.polynomial.polyval(-t * s / 2 ** j, coef) ** (2 ** j)
 
             with np.errstate(over="ignore", invalid="ignore"):
-                err = sup_error(lambda s: np.exp(-t * s) - r(s), a, b, n=1500)
+                err = sup_error(lambda s: np.exp(-t * s) - r(s), a, b, n=1500, scale=1.0)
             if not np.isfinite(err):
                 err = np.inf
             if best is None or err < best[0]:

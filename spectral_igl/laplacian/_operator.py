@@ -99,23 +99,74 @@ def _symmetrize(A: sp.spmatrix) -> sp.csr_matrix:
     return A
 
 
+def _canonical(A: sp.spmatrix) -> sp.csr_matrix:
+    """``A`` as canonical CSR (sorted, summed, no explicit zeros), for an exactly symmetric ``A``."""
+    A = sp.csr_matrix(A, dtype=np.float64, copy=True)
+    A.sum_duplicates()
+    A.eliminate_zeros()
+    A.sort_indices()
+    return A
+
+
+def _zero_row_sums(L: sp.csr_matrix) -> sp.csr_matrix:
+    """Replace the diagonal of a canonical CSR ``L`` by minus its off-diagonal row sums.
+
+    Equal, entry for entry and in the stored pattern, to
+    ``off - diags(off.sum(1))`` with ``off = L - diags(L.diagonal())`` (zeros dropped):
+    the row sums are accumulated in the same order (``np.add.reduceat``). Done on the CSR arrays directly when
+    every row has a nonzero result on the diagonal, the common case; when all of them
+    also lack a stored diagonal entry, the entries are inserted in one pass.
+    """
+    n = L.shape[0]
+    counts = np.diff(L.indptr)
+    row = np.repeat(np.arange(n, dtype=L.indices.dtype), counts)
+    isdiag = L.indices == row
+    off = np.where(isdiag, 0.0, L.data)
+    # scipy's row sum is np.add.reduceat over the stored off-diagonal entries: do the same
+    keep = ~isdiag
+    ptr = np.concatenate([[0], np.cumsum(np.bincount(row[keep], minlength=n))])
+    vals = L.data[keep]
+    rs = np.zeros(n)
+    nonempty = ptr[1:] > ptr[:-1]
+    if vals.size:
+        rs[nonempty] = np.add.reduceat(vals, ptr[:-1][nonempty])
+    if np.all(rs != 0):
+        nd = int(np.count_nonzero(isdiag))
+        if nd == n:
+            off[isdiag] = -rs
+            return sp.csr_matrix((off, L.indices.copy(), L.indptr.copy()), shape=L.shape)
+        if nd == 0:
+            below = np.bincount(row[L.indices < row], minlength=n)
+            pos = np.arange(L.nnz) + row + (L.indices > row)
+            dpos = L.indptr[:-1] + np.arange(n) + below
+            data = np.empty(L.nnz + n)
+            idx = np.empty(L.nnz + n, dtype=L.indices.dtype)
+            data[pos], idx[pos] = off, L.indices
+            data[dpos], idx[dpos] = -rs, np.arange(n)
+            indptr = L.indptr + np.arange(n + 1, dtype=L.indptr.dtype)
+            return sp.csr_matrix((data, idx, indptr), shape=L.shape)
+    offm = L - sp.diags(L.diagonal())
+    L = (offm - sp.diags(np.asarray(offm.sum(axis=1)).ravel())).tocsr()
+    L.sort_indices()
+    return L
+
+
 def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
-                   adjacency: sp.spmatrix | None = None) -> Laplacian:
+                   adjacency: sp.spmatrix | None = None, *, _symmetric: bool = False) -> Laplacian:
     """Build a :class:`Laplacian` from a stiffness ``L`` (PSD) and a mass ``B`` (SPD).
 
     ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0.
     This is the one place where every constructor's matrices are normalised.
     Components come from ``adjacency`` (e.g. the mesh's elements) when given, else from
     the nonzero pattern of ``L``; a cotangent weight that happens to be exactly zero
-    must not split a connected mesh.
+    must not split a connected mesh. ``_symmetric=True`` is a constructor's promise that
+    ``L`` equals ``L.T`` entry for entry, so :math:`(L + L^T)/2 = L` needs no transpose.
     """
-    L = _symmetrize(L)
+    L = _canonical(L) if _symmetric else _symmetrize(L)
     n = L.shape[0]
     if L.shape != (n, n):
         raise ValueError(f"L must be square, got shape {L.shape}")
-    off = L - sp.diags(L.diagonal())
-    L = (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
-    L.sort_indices()
+    L = _zero_row_sums(L)
     B = _symmetrize(B)
     if B.shape != (n, n):
         raise ValueError(f"B must have shape {(n, n)}, got {B.shape}")

@@ -6,11 +6,16 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_nonnegative
+from .._validate import as_cells, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import _MASSES, _mass, clean_mesh, mesh_components
+from .mesh import _MASSES, _clean_mesh, _mass, _star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
+
+try:  # compiled per-face kernel; the NumPy reference below computes the same (tested)
+    from .._assembly import anisotropic_faces as _faces_compiled
+except ImportError:  # pragma: no cover - source checkout without a build
+    _faces_compiled = None
 
 
 def _face_frames(V, F):
@@ -20,6 +25,11 @@ def _face_frames(V, F):
     N = np.cross(e2, -e1)  # (v1 - v0) x (v2 - v0), length 2A
     dbl = np.linalg.norm(N, axis=1)
     return (e0, e1, e2), N, dbl
+
+
+def _scatter(idx, vals, n):
+    """Row sums by index: out[i] = sum of vals[k] with idx[k] == i, vals (K, d)."""
+    return np.stack([np.bincount(idx, weights=vals[:, j], minlength=n) for j in range(vals.shape[1])], axis=1)
 
 
 def face_curvature(V, F):
@@ -43,13 +53,24 @@ def face_curvature(V, F):
     dirs : (m, 2, 3) float
         Unit principal directions in the face plane, ``dirs[:, a]`` for ``kappa[:, a]``.
     """
+    V = np.ascontiguousarray(as_points(V, "V", dims=(3,)), dtype=np.float64)
+    F = np.ascontiguousarray(as_cells(F, V.shape[0], "F"), dtype=np.int64)
+    if F.shape[1] != 3:
+        raise ValueError(f"face_curvature needs triangles, got F of shape {F.shape}")
+    if _faces_compiled is not None:
+        kappa, dirs, _ = _faces_compiled(V, F, 0.0)
+        return kappa, dirs
+    return _face_curvature_numpy(V, F)
+
+
+def _face_curvature_numpy(V, F):
+    """NumPy reference of :func:`face_curvature` (the compiled kernel mirrors it)."""
     n = V.shape[0]
     (e0, e1, e2), N, dbl = _face_frames(V, F)
     area = 0.5 * dbl
     Nf = N / dbl[:, None]
-    vn = np.zeros((n, 3))
-    for a in range(3):
-        np.add.at(vn, F[:, a], N)
+    idx = F.T.ravel()  # vertex of (corner a, face f) at a * m + f
+    vn = _scatter(idx, np.tile(N, (3, 1)), n)
     nrm = np.linalg.norm(vn, axis=1)
     vn = np.where(nrm[:, None] > 0, vn / np.where(nrm > 0, nrm, 1.0)[:, None], 0.0)
     # orthonormal frame (u, w) of each face
@@ -75,11 +96,8 @@ def face_curvature(V, F):
     Fr = np.stack([u, w], axis=1)  # (m, 2, 3)
     S3 = np.einsum("mai,mab,mbj->mij", Fr, S2, Fr)
     S3 = np.where(np.isfinite(S3), S3, 0.0)
-    Sv = np.zeros((n, 3, 3))
-    wv = np.zeros(n)
-    for a in range(3):
-        np.add.at(Sv, F[:, a], S3 * area[:, None, None])
-        np.add.at(wv, F[:, a], area)
+    Sv = _scatter(idx, np.tile((S3 * area[:, None, None]).reshape(-1, 9), (3, 1)), n).reshape(n, 3, 3)
+    wv = np.bincount(idx, weights=np.tile(area, 3), minlength=n)
     Sv /= np.where(wv > 0, wv, 1.0)[:, None, None]
     Sf = (Sv[F[:, 0]] + Sv[F[:, 1]] + Sv[F[:, 2]]) / 3.0
     S2 = np.einsum("mai,mij,mbj->mab", Fr, Sf, Fr)
@@ -91,6 +109,26 @@ def face_curvature(V, F):
 
 def _phi(s, alpha):
     return 1.0 / (1.0 + alpha * np.abs(s))
+
+
+def _anisotropic_faces_numpy(V, F, alpha):
+    """NumPy reference: ``(kappa, dirs, K)`` with ``K`` (m, 3, 3) the stiffness of each face."""
+    (e0, e1, e2), N, dbl = _face_frames(V, F)
+    Nf = N / dbl[:, None]
+    # P1 gradients: grad phi_a = (n x e_a) / (2A), e_a the edge opposite vertex a
+    G = np.stack([np.cross(Nf, e) for e in (e0, e1, e2)], axis=1) / dbl[:, None, None]
+    area = 0.5 * dbl
+    kappa, dirs = _face_curvature_numpy(V, F)
+    if alpha == 0.0:
+        K = np.einsum("mai,mbi->mab", G, G)
+    else:
+        ph = _phi(kappa, alpha)  # (m, 2)
+        Gd = np.einsum("mai,mki->mak", G, dirs)  # gradient components in the principal frame
+        K = np.einsum("mak,mk,mbk->mab", Gd, ph, Gd)
+        # the normal component of each gradient is 0; the in-plane complement of
+        # span(dirs) is empty, so K is the full tensor product
+    K *= area[:, None, None]
+    return kappa, dirs, K
 
 
 def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Laplacian:
@@ -135,7 +173,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     alpha = as_nonnegative(alpha, "alpha")
     if mass not in _MASSES:
         raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, F, dropped = clean_mesh(V, F)
+    V, F, dropped, meas = _clean_mesh(V, F)
     if F.shape[1] != 3:
         raise ValueError(f"anisotropic_laplacian needs triangles, got F of shape {F.shape}")
     if V.shape[1] != 3:
@@ -144,25 +182,15 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         warnings.warn(f"dropped {dropped} degenerate face(s) (zero area or repeated vertex)",
                       RuntimeWarning, stacklevel=2)
     n = V.shape[0]
-    (e0, e1, e2), N, dbl = _face_frames(V, F)
-    Nf = N / dbl[:, None]
-    # P1 gradients: grad phi_a = (n x e_a) / (2A), e_a the edge opposite vertex a
-    G = np.stack([np.cross(Nf, e) for e in (e0, e1, e2)], axis=1) / dbl[:, None, None]
-    area = 0.5 * dbl
-    kappa, dirs = face_curvature(V, F)
-    if alpha == 0.0:
-        K = np.einsum("mai,mbi->mab", G, G)
+    if _faces_compiled is not None:
+        kappa, dirs, K = _faces_compiled(np.ascontiguousarray(V, dtype=np.float64),
+                                         np.ascontiguousarray(F, dtype=np.int64), float(alpha))
     else:
-        ph = _phi(kappa, alpha)  # (m, 2)
-        Gd = np.einsum("mai,mki->mak", G, dirs)  # gradient components in the principal frame
-        K = np.einsum("mak,mk,mbk->mab", Gd, ph, Gd)
-        # the normal component of each gradient is 0; the in-plane complement of
-        # span(dirs) is empty, so K is the full tensor product
-    K *= area[:, None, None]
+        kappa, dirs, K = _anisotropic_faces_numpy(V, F, alpha)
     r = np.repeat(F, 3, axis=1).ravel()
     c = np.tile(F, (1, 3)).ravel()
     L = sp.csr_matrix((K.ravel(), (r, c)), shape=(n, n))
-    B = _mass(V, F, mass)
+    B = _mass(V, F, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[F.ravel()] = True
     if not referenced.all():
@@ -173,4 +201,4 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     data = {"V": V, "F": F, "weights": "anisotropic", "mass": mass, "alpha": alpha,
             "kappa": kappa, "dirs": dirs, "referenced": referenced}
-    return make_laplacian(L, B, domain="triangle", data=data, adjacency=mesh_components(n, F))
+    return make_laplacian(L, B, domain="triangle", data=data, adjacency=_star_adjacency(n, F))

@@ -15,6 +15,13 @@ _WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform")
 _MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (m, 3) arrays (np.cross without its overhead)."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
 def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
     """(m,) area of each triangle or volume of each tetrahedron (unsigned)."""
     if C.shape[1] == 3:
@@ -22,9 +29,9 @@ def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
         e2 = V[C[:, 2]] - V[C[:, 0]]
         if V.shape[1] == 2:
             return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-        return 0.5 * np.linalg.norm(np.cross(e1, e2), axis=1)
+        return 0.5 * np.linalg.norm(_cross(e1, e2), axis=1)
     e1, e2, e3 = (V[C[:, k]] - V[C[:, 0]] for k in (1, 2, 3))
-    return np.abs(np.einsum("ij,ij->i", np.cross(e1, e2), e3)) / 6.0
+    return np.abs(np.einsum("ij,ij->i", _cross(e1, e2), e3)) / 6.0
 
 
 def clean_mesh(V, C, rel_tol: float = 1e-12):
@@ -35,8 +42,15 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
     infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
+    V, C, dropped, _ = _clean_mesh(V, C, rel_tol)
+    return V, C, dropped
+
+
+def _clean_mesh(V, C, rel_tol: float = 1e-12):
+    """:func:`clean_mesh`, also returning the measures of the kept elements."""
     V = as_points(V, "V", dims=(2, 3))
-    C = as_cells(C, V.shape[0], "F" if np.shape(C)[-1] == 3 else "T")
+    shape = np.shape(C) if isinstance(C, np.ndarray) else ()
+    C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
     if C.shape[1] == 4 and V.shape[1] != 3:
         raise ValueError(f"tetrahedra need 3-D vertices; V has shape {V.shape}")
     s = np.sort(C, axis=1)
@@ -46,7 +60,7 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
     bad = repeated | (meas <= rel_tol * top) | ~np.isfinite(meas)
     if bad.all():
         raise ValueError(f"all {C.shape[0]} elements are degenerate (zero area/volume or repeated vertices)")
-    return V, C[~bad], int(bad.sum())
+    return V, C[~bad], int(bad.sum()), meas[~bad]
 
 
 def mesh_components(n: int, C: np.ndarray) -> sp.csr_matrix:
@@ -54,6 +68,18 @@ def mesh_components(n: int, C: np.ndarray) -> sp.csr_matrix:
     k = C.shape[1]
     i = np.concatenate([C[:, a] for a in range(k) for b in range(k) if a != b])
     j = np.concatenate([C[:, b] for a in range(k) for b in range(k) if a != b])
+    return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
+
+
+def _star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
+    """(n, n) pattern linking each element's first vertex to its others, one direction.
+
+    Its connected components (as an undirected graph) are those of
+    :func:`mesh_components`, from ``k - 1`` entries per element instead of ``k(k - 1)``.
+    """
+    k = C.shape[1]
+    i = np.repeat(C[:, 0], k - 1)
+    j = C[:, 1:].ravel()
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
@@ -83,30 +109,29 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
     return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
 
 
-def _full_mass(V: np.ndarray, C: np.ndarray) -> sp.csr_matrix:
+def _full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> sp.csr_matrix:
     """Consistent linear-FEM mass: |e| (1 + δ_ij) / ((k)(k+1)) per element of k vertices."""
     k = C.shape[1]
-    meas = element_measures(V, C)
+    if meas is None:
+        meas = element_measures(V, C)
     denom = 12.0 if k == 3 else 20.0
-    rows, cols, vals = [], [], []
-    for a in range(k):
-        for b in range(k):
-            rows.append(C[:, a])
-            cols.append(C[:, b])
-            vals.append(meas * ((2.0 if a == b else 1.0) / denom))
+    # (a, b)-major order, as the duplicates are summed
+    rows = np.repeat(C.T, k, axis=0).ravel()
+    cols = np.tile(C.T, (k, 1)).ravel()
+    vals = np.concatenate([meas * ((2.0 if a == b else 1.0) / denom) for a in range(k) for b in range(k)])
     n = V.shape[0]
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
-def _mass(V: np.ndarray, C: np.ndarray, mass: str) -> sp.csr_matrix:
+def _mass(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
     import igl
 
     if mass == "full":
-        return _full_mass(V, C)
+        return _full_mass(V, C, meas)
     if mass in ("lumped", "voronoi") and C.shape[1] == 3:
         return igl.massmatrix(V, C, igl.MASSMATRIX_TYPE_VORONOI).tocsr()
     # barycentric: row sums of the consistent mass (the lumped mass of tets as well)
-    return sp.diags(np.asarray(_full_mass(V, C).sum(axis=1)).ravel()).tocsr()
+    return sp.diags(np.asarray(_full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
 
 def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
@@ -158,7 +183,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
     if mass not in _MASSES:
         raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, C, dropped = clean_mesh(V, F)
+    V, C, dropped, meas = _clean_mesh(V, F)
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
@@ -168,7 +193,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
                       "using weights='cotan'", RuntimeWarning, stacklevel=2)
         weights = "cotan"
     L = cotan_stiffness(V, C, weights)
-    B = _mass(V, C, mass)
+    B = _mass(V, C, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
     n_unref = int(n - referenced.sum())
@@ -180,4 +205,4 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
     domain = "triangle" if C.shape[1] == 3 else "tet"
     key = "F" if domain == "triangle" else "T"
     data = {"V": V, key: C, "weights": weights, "mass": mass, "referenced": referenced}
-    return make_laplacian(L, B, domain=domain, data=data, adjacency=mesh_components(n, C))
+    return make_laplacian(L, B, domain=domain, data=data, adjacency=_star_adjacency(n, C))

@@ -13,6 +13,11 @@ __all__ = ["point_cloud_laplacian", "tangent_voronoi_areas"]
 
 _METHODS = ("belkin", "liu")
 
+try:  # compiled clipping loop; _clip_cells below is its NumPy reference (tested equal)
+    from .._assembly import clip_cells as _clip_compiled
+except ImportError:  # pragma: no cover - source checkout without a build
+    _clip_compiled = None
+
 
 def _neighbours(P: np.ndarray, k: int | None, radius: float | None):
     """Directed neighbour pairs (i, j), i != j, and the local area per point h² (n,)."""
@@ -22,6 +27,9 @@ def _neighbours(P: np.ndarray, k: int | None, radius: float | None):
     tree = cKDTree(P)
     if radius is None:
         d, J = tree.query(P, k + 1, workers=-1)
+        if not np.all(np.isfinite(d)):
+            raise ValueError("neighbour distances overflow to inf: the point coordinates are too "
+                             f"large (max |P| = {np.abs(P).max():.3g}); rescale P")
         # drop each point itself (column 0 unless duplicates reorder the ties)
         own = J == np.arange(n)[:, None]
         keep = ~own
@@ -110,7 +118,10 @@ def _voronoi_from_knn(P, d, J):
     _, U = np.linalg.eigh(C)
     Q = np.einsum("nki,nij->nkj", nb, U[:, :, 1:])
     half = 1.5 * d[:, min(7, d.shape[1] - 1)]
-    A = _clip_cells(Q, half)
+    if _clip_compiled is not None:
+        A = _clip_compiled(np.ascontiguousarray(Q, dtype=np.float64), np.ascontiguousarray(half, dtype=np.float64))
+    else:
+        A = _clip_cells(Q, half)
     good = np.isfinite(A) & (A > 0)
     if not good.all():
         fill = float(np.mean(A[good])) if good.any() else 1.0
@@ -217,12 +228,17 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "belkin", t=Non
         ti = bandwidth ** 2 * h2
     else:
         ti = np.full(n, as_positive(t, "t"))
-    # symmetric pattern: union of the directed neighbour relations
-    pat = sp.csr_matrix((np.ones(I.size), (I, J)), shape=(n, n))
-    pat = (pat + pat.T).tocoo()
-    r, c = pat.row.astype(np.int64), pat.col.astype(np.int64)
-    keep = r != c
-    r, c = r[keep], c[keep]
+    # symmetric pattern: union of the directed neighbour relations, without the diagonal
+    if Jk is not None and radius is None:
+        pat = sp.csr_matrix((np.ones(I.size), J, np.arange(0, I.size + 1, k)), shape=(n, n))
+    else:
+        pat = sp.csr_matrix((np.ones(I.size), (I, J)), shape=(n, n))
+    pat = (pat + pat.T).tocsr()
+    pat.setdiag(0)
+    pat.eliminate_zeros()
+    pat.sort_indices()
+    c = pat.indices.astype(np.int64)
+    r = np.repeat(np.arange(n, dtype=np.int64), np.diff(pat.indptr))
     tij = 0.5 * (ti[r] + ti[c])
     diff = P[r] - P[c]
     g = np.exp(-np.einsum("ij,ij->i", diff, diff) / (4.0 * tij))
@@ -244,8 +260,9 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "belkin", t=Non
         a = _voronoi_from_knn(P, d[:, :kv], Jk[:, :kv])
         w = a[r] * a[c] * g / (4.0 * np.pi * tij ** 2)
         mass = a
-    W = sp.csr_matrix((w, (r, c)), shape=(n, n))
-    L = sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W
+    # L = D - W; W is symmetric entry for entry (every factor of w is symmetric in (r, c))
+    # and make_laplacian puts the row sums of W on the diagonal
+    L = sp.csr_matrix((-w, pat.indices, pat.indptr), shape=(n, n))
     B = sp.diags(mass).tocsr()
     data = {"P": P, "method": method, "t": ti, "k": k, "radius": radius}
-    return make_laplacian(L, B, domain="points", data=data)
+    return make_laplacian(L, B, domain="points", data=data, _symmetric=True)

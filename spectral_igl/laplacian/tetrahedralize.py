@@ -55,11 +55,21 @@ def tetrahedralize(V, F, edge_length_fac: float = 0.05, edge_length_abs: float |
     epsilon = as_positive(epsilon, "epsilon")
     if element_measures(V, F).max() <= 0:
         raise ValueError("F has no face of positive area")
+    import os
+    import tempfile
+
     import pytetwild
 
-    Vt, T = pytetwild.tetrahedralize(V, F.astype(np.int32), edge_length_fac=edge_length_fac,
-                                     edge_length_abs=edge_length_abs, epsilon=epsilon,
-                                     optimize=bool(optimize), quiet=bool(quiet))
+    # fTetWild writes a scratch file (__tracked_surface.stl) into the working directory
+    cwd = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)
+        try:
+            Vt, T = pytetwild.tetrahedralize(V, F.astype(np.int32), edge_length_fac=edge_length_fac,
+                                             edge_length_abs=edge_length_abs, epsilon=epsilon,
+                                             optimize=bool(optimize), quiet=bool(quiet))
+        finally:
+            os.chdir(cwd)
     Vt = np.ascontiguousarray(Vt, dtype=np.float64)
     T = np.ascontiguousarray(T, dtype=np.int64)
     if T.size == 0:

@@ -1,0 +1,265 @@
+// Per-element kernels of the anisotropic and point-cloud Laplacians.
+//
+// Python validates every input (shapes, dtypes, index ranges) before calling in here;
+// these loops assume valid data. Each function mirrors, operation for operation, the
+// NumPy reference in spectral_igl/laplacian (tests compare the two).
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace nb = nanobind;
+
+using InF2 = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using InF3 = nb::ndarray<const double, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+using InF1 = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using InI2 = nb::ndarray<const int64_t, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using OutF = nb::ndarray<nb::numpy, double>;
+
+namespace {
+
+OutF make_array(std::vector<size_t> shape) {
+    size_t total = 1;
+    for (size_t s : shape) total *= s;
+    double *buf = new double[std::max<size_t>(total, 1)];
+    std::fill(buf, buf + total, 0.0);
+    nb::capsule owner(buf, [](void *p) noexcept { delete[] static_cast<double *>(p); });
+    return OutF(buf, shape.size(), shape.data(), owner);
+}
+
+inline void cross(const double *a, const double *b, double *c) {
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+inline double dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// 3x3 solve by Gaussian elimination with partial pivoting (as LAPACK gesv).
+void solve3(double A[3][3], double b[3], double x[3]) {
+    for (int c = 0; c < 3; ++c) {
+        int p = c;
+        for (int r = c + 1; r < 3; ++r)
+            if (std::fabs(A[r][c]) > std::fabs(A[p][c])) p = r;
+        if (p != c) {
+            for (int j = 0; j < 3; ++j) std::swap(A[c][j], A[p][j]);
+            std::swap(b[c], b[p]);
+        }
+        for (int r = c + 1; r < 3; ++r) {
+            double l = A[r][c] / A[c][c];
+            for (int j = c; j < 3; ++j) A[r][j] -= l * A[c][j];
+            b[r] -= l * b[c];
+        }
+    }
+    for (int c = 2; c >= 0; --c) {
+        double s = b[c];
+        for (int j = c + 1; j < 3; ++j) s -= A[c][j] * x[j];
+        x[c] = s / A[c][c];
+    }
+}
+
+// Eigen-decomposition of the symmetric [[a, b], [b, c]]: ascending values, unit vectors
+// as columns of U (U[row][col]).
+void eigh2(double a, double b, double c, double lam[2], double U[2][2]) {
+    double m = 0.5 * (a + c), h = 0.5 * (a - c);
+    double r = std::hypot(h, b);
+    lam[0] = m - r;
+    lam[1] = m + r;
+    double th = 0.5 * std::atan2(b, h);  // direction of the larger eigenvalue
+    double cs = std::cos(th), sn = std::sin(th);
+    U[0][1] = cs;
+    U[1][1] = sn;
+    U[0][0] = -sn;
+    U[1][0] = cs;
+}
+
+}  // namespace
+
+// Principal curvatures/directions per face and the anisotropic stiffness per face.
+nb::tuple anisotropic_faces(InF2 V_, InI2 F_, double alpha) {
+    const size_t n = V_.shape(0), m = F_.shape(0);
+    const double *V = V_.data();
+    const int64_t *F = F_.data();
+    OutF kappa_ = make_array({m, 2}), dirs_ = make_array({m, 2, 3}), K_ = make_array({m, 3, 3});
+    double *kappa = kappa_.data(), *dirs = dirs_.data(), *K = K_.data();
+    {
+        nb::gil_scoped_release release;
+        std::vector<double> E(9 * m), Nf(3 * m), dbl(m), Fr(6 * m), S3(9 * m);
+        std::vector<double> vn(3 * n, 0.0), Sv(9 * n, 0.0), wv(n, 0.0);
+        for (size_t f = 0; f < m; ++f) {
+            const double *p0 = V + 3 * F[3 * f], *p1 = V + 3 * F[3 * f + 1], *p2 = V + 3 * F[3 * f + 2];
+            double *e = &E[9 * f];
+            for (int i = 0; i < 3; ++i) {
+                e[i] = p2[i] - p1[i];      // opposite vertex 0
+                e[3 + i] = p0[i] - p2[i];  // opposite vertex 1
+                e[6 + i] = p1[i] - p0[i];  // opposite vertex 2
+            }
+            double me1[3] = {-e[3], -e[4], -e[5]}, N[3];
+            cross(e + 6, me1, N);
+            double d = std::sqrt(dot(N, N));
+            dbl[f] = d;
+            for (int i = 0; i < 3; ++i) Nf[3 * f + i] = N[i] / d;
+            for (int a = 0; a < 3; ++a)
+                for (int i = 0; i < 3; ++i) vn[3 * F[3 * f + a] + i] += N[i];
+        }
+        for (size_t v = 0; v < n; ++v) {
+            double *x = &vn[3 * v];
+            double r = std::sqrt(dot(x, x));
+            for (int i = 0; i < 3; ++i) x[i] = r > 0 ? x[i] / r : 0.0;
+        }
+        static const int pq[3][2] = {{1, 2}, {2, 0}, {0, 1}};
+        for (size_t f = 0; f < m; ++f) {
+            const double *e = &E[9 * f], *nf = &Nf[3 * f];
+            double *u = &Fr[6 * f], *w = u + 3;
+            double le = std::sqrt(dot(e + 6, e + 6));
+            for (int i = 0; i < 3; ++i) u[i] = e[6 + i] / le;
+            cross(nf, u, w);
+            double AtA[3][3] = {{0}}, Atb[3] = {0};
+            for (int k = 0; k < 3; ++k) {
+                const double *vp = &vn[3 * F[3 * f + pq[k][0]]], *vq = &vn[3 * F[3 * f + pq[k][1]]];
+                double dn[3] = {vq[0] - vp[0], vq[1] - vp[1], vq[2] - vp[2]};
+                double eu = dot(e + 3 * k, u), ew = dot(e + 3 * k, w);
+                double du = dot(dn, u), dw = dot(dn, w);
+                double r1[3] = {eu, ew, 0.0}, r2[3] = {0.0, eu, ew};
+                for (int i = 0; i < 3; ++i) {
+                    for (int j = 0; j < 3; ++j) AtA[i][j] += r1[i] * r1[j] + r2[i] * r2[j];
+                    Atb[i] += r1[i] * du + r2[i] * dw;
+                }
+            }
+            double tr = AtA[0][0] + AtA[1][1] + AtA[2][2];
+            for (int i = 0; i < 3; ++i) AtA[i][i] += 1e-12 * tr;
+            double x[3];
+            solve3(AtA, Atb, x);
+            double S2[2][2] = {{x[0], x[1]}, {x[1], x[2]}};
+            double *s3 = &S3[9 * f];
+            bool finite = true;
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) {
+                    double s = 0.0;
+                    for (int a = 0; a < 2; ++a)
+                        for (int b = 0; b < 2; ++b) s += Fr[6 * f + 3 * a + i] * S2[a][b] * Fr[6 * f + 3 * b + j];
+                    s3[3 * i + j] = s;
+                    finite = finite && std::isfinite(s);
+                }
+            for (int i = 0; i < 9; ++i)
+                if (!std::isfinite(s3[i])) s3[i] = 0.0;
+            double area = 0.5 * dbl[f];
+            for (int a = 0; a < 3; ++a) {
+                int64_t v = F[3 * f + a];
+                for (int i = 0; i < 9; ++i) Sv[9 * v + i] += s3[i] * area;
+                wv[v] += area;
+            }
+        }
+        for (size_t v = 0; v < n; ++v) {
+            double d = wv[v] > 0 ? wv[v] : 1.0;
+            for (int i = 0; i < 9; ++i) Sv[9 * v + i] /= d;
+        }
+        for (size_t f = 0; f < m; ++f) {
+            double Sf[9];
+            const double *a0 = &Sv[9 * F[3 * f]], *a1 = &Sv[9 * F[3 * f + 1]], *a2 = &Sv[9 * F[3 * f + 2]];
+            for (int i = 0; i < 9; ++i) Sf[i] = (a0[i] + a1[i] + a2[i]) / 3.0;
+            const double *fr = &Fr[6 * f];
+            double S2[2][2];
+            for (int a = 0; a < 2; ++a)
+                for (int b = 0; b < 2; ++b) {
+                    double s = 0.0;
+                    for (int i = 0; i < 3; ++i)
+                        for (int j = 0; j < 3; ++j) s += fr[3 * a + i] * Sf[3 * i + j] * fr[3 * b + j];
+                    S2[a][b] = s;
+                }
+            double off = 0.5 * (S2[0][1] + S2[1][0]);
+            double lam[2], U[2][2];
+            eigh2(S2[0][0], off, S2[1][1], lam, U);
+            kappa[2 * f] = lam[0];
+            kappa[2 * f + 1] = lam[1];
+            double *dr = &dirs[6 * f];
+            for (int b = 0; b < 2; ++b)
+                for (int i = 0; i < 3; ++i) dr[3 * b + i] = U[0][b] * fr[i] + U[1][b] * fr[3 + i];
+            // P1 gradients grad phi_a = (n x e_a) / (2A), then K = A G D G^T
+            const double *e = &E[9 * f], *nf = &Nf[3 * f];
+            double G[3][3];
+            for (int a = 0; a < 3; ++a) {
+                cross(nf, e + 3 * a, G[a]);
+                for (int i = 0; i < 3; ++i) G[a][i] /= dbl[f];
+            }
+            double *k = &K[9 * f];
+            double area = 0.5 * dbl[f];
+            if (alpha == 0.0) {
+                for (int a = 0; a < 3; ++a)
+                    for (int b = 0; b < 3; ++b) k[3 * a + b] = dot(G[a], G[b]) * area;
+            } else {
+                double ph[2] = {1.0 / (1.0 + alpha * std::fabs(lam[0])), 1.0 / (1.0 + alpha * std::fabs(lam[1]))};
+                double Gd[3][2];
+                for (int a = 0; a < 3; ++a)
+                    for (int c = 0; c < 2; ++c) Gd[a][c] = dot(G[a], dr + 3 * c);
+                for (int a = 0; a < 3; ++a)
+                    for (int b = 0; b < 3; ++b)
+                        k[3 * a + b] = (Gd[a][0] * ph[0] * Gd[b][0] + Gd[a][1] * ph[1] * Gd[b][1]) * area;
+            }
+        }
+    }
+    return nb::make_tuple(kappa_, dirs_, K_);
+}
+
+// Area of the Voronoi cell of the origin among the 2-D points Q (n, k, 2), clipped to the
+// square [-half, half]^2 (Sutherland--Hodgman by the bisector half-planes x.q <= |q|^2/2).
+OutF clip_cells(InF3 Q_, InF1 half_) {
+    const size_t n = Q_.shape(0), k = Q_.shape(1);
+    const double *Q = Q_.data(), *half = half_.data();
+    OutF A_ = make_array({n});
+    double *A = A_.data();
+    {
+        nb::gil_scoped_release release;
+        std::vector<double> poly, out;
+        poly.reserve(2 * (k + 8));
+        out.reserve(2 * (k + 8));
+        for (size_t p = 0; p < n; ++p) {
+            double s = half[p];
+            poly.assign({-s, -s, s, -s, s, s, -s, s});
+            for (size_t j = 0; j < k && !poly.empty(); ++j) {
+                double qx = Q[2 * (p * k + j)], qy = Q[2 * (p * k + j) + 1];
+                double c = 0.5 * (qx * qx + qy * qy);
+                size_t mcount = poly.size() / 2;
+                out.clear();
+                for (size_t a = 0; a < mcount; ++a) {
+                    size_t b = (a + 1) % mcount;
+                    double xa = poly[2 * a], ya = poly[2 * a + 1], xb = poly[2 * b], yb = poly[2 * b + 1];
+                    double fa = xa * qx + ya * qy - c, fb = xb * qx + yb * qy - c;
+                    bool ina = fa <= 0, inb = fb <= 0;
+                    if (ina) {
+                        out.push_back(xa);
+                        out.push_back(ya);
+                    }
+                    if (ina != inb) {
+                        double t = fa / (fa - fb);
+                        out.push_back(xa + t * (xb - xa));
+                        out.push_back(ya + t * (yb - ya));
+                    }
+                }
+                poly.swap(out);
+            }
+            size_t mcount = poly.size() / 2;
+            if (mcount < 3) {
+                A[p] = 0.0;
+                continue;
+            }
+            double s2 = 0.0;
+            for (size_t a = 0; a < mcount; ++a) {
+                size_t b = (a + 1) % mcount;
+                s2 += poly[2 * a] * poly[2 * b + 1] - poly[2 * b] * poly[2 * a + 1];
+            }
+            A[p] = 0.5 * std::fabs(s2);
+        }
+    }
+    return A_;
+}
+
+NB_MODULE(_assembly, m) {
+    m.doc() = "Compiled per-element kernels of spectral_igl's Laplacian constructors.";
+    m.def("anisotropic_faces", &anisotropic_faces, nb::arg("V"), nb::arg("F"), nb::arg("alpha"),
+          "(kappa (m, 2), dirs (m, 2, 3), K (m, 3, 3)) of a clean triangle mesh.");
+    m.def("clip_cells", &clip_cells, nb::arg("Q"), nb::arg("half"),
+          "(n,) tangent-plane Voronoi cell areas of the origin among Q (n, k, 2).");
+}

@@ -1,0 +1,40 @@
+"""Heat methods against the dense ground truth; the certified bound is never below the error."""
+import numpy as np
+import pytest
+
+import spectral_igl as sig
+from engine_cases import HEAT_TIMES, SHAPES, bnorm, check, shape, truth  # noqa: F401
+from spectral_igl import filters
+
+
+@pytest.mark.parametrize("name", list(SHAPES))
+@pytest.mark.parametrize("method", ["rational", "contour", "shift_invert", "chebyshev", "krylov"])
+def test_heat_accurate_and_bounded(name, method, rng):
+    lap, ev, X = shape(name)
+    f = rng.standard_normal((lap.n, 2))
+    for t in HEAT_TIMES:
+        if method == "krylov" and t * sig.lambda_max(lap) > 1e4:
+            continue  # polynomial Krylov needs ~sqrt(t lambda_max) steps: covered at small t
+        op, err, slack = check(lap, ev, X, filters.heat(t), method, f)
+        assert np.all(err <= op.error_bound + slack), (t, err, op.error_bound)
+        assert np.all(op.error_bound <= 1e-8 * bnorm(lap, f) + slack * 10), (t, op.error_bound)
+
+
+@pytest.mark.parametrize("method, opts", [("euler", {"steps": 1}), ("euler", {"steps": 8}),
+                                          ("taylor1", {}), ("power", {}), ("taylor", {}),
+                                          ("rational", {"degree": 4}), ("contour", {"nodes": 6}),
+                                          ("chebyshev", {"degree": 5}), ("krylov", {"steps": 4}),
+                                          ("shift_invert", {"steps": 4})])
+def test_heat_low_order_bound_holds(method, opts, rng):
+    """Crude settings: the error is large, and the bound must still cover it."""
+    lap, ev, X = shape("sphere")
+    f = rng.standard_normal(lap.n)
+    for t in HEAT_TIMES:
+        if method == "power" and t * sig.lambda_max(lap) > 2 ** 14:
+            with pytest.raises(ValueError, match="squarings"):
+                sig.SpectralOperator(lap, filters.heat(t), method="power")
+            continue
+        op, err, slack = check(lap, ev, X, filters.heat(t), method, f, **opts)
+        assert err <= op.error_bound + slack, (t, err, op.error_bound)
+
+
