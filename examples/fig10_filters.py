@@ -1,7 +1,7 @@
 """Fig. 10: the filters phi applied to the Laplacian eigenvalues (log-log axes).
 
 Heat e^(-ts) at several t, commute time s^(-1/2), biharmonic s^(-1), poly-harmonic
-s^(-k/2), Mexican hat t s e^(-ts) and the real part of the wave filter, each sampled at
+s^(-k/2), and Mexican hat t s e^(-ts), each sampled at
 the eigenvalues of the shape. On the unit sphere the eigenvalues are l(l+1).
 """
 from __future__ import annotations

@@ -55,10 +55,11 @@ def main(argv=None):
     axes[0, 0].set_ylabel("K_t(p, source)", fontsize=8)
     images = [C.savefig(fig, out / "fig15_gibbs.png")]
     j = 0
-    images.append(C.render(out / "fig15_truncated_kernel.png", [(V, F), (V, F)],
-                           [exact[j], truncated[j]], kind="cyclic", sources=[i],
-                           labels=["spectrum-free", f"truncated, k={k}"],
-                           title=f"heat kernel, t={times[j]:.2e}"))
+    images.append(C.render(out / "fig15_truncated_kernel.png", [(V, F)] * 3,
+                           [exact[j], truncated[j], truncated[j] - exact[j]], kind="cyclic",
+                           sources=[i], shared_scale=False,
+                           labels=[f"spectrum-free, t={times[j]:.1e}", f"truncated, k={k}",
+                                   "difference"], window_size=(1350, 450)))
     result = {"n": lap.n, "k": k, "times": times,
               "truncated_min": min(r[1] for r in rows),
               "spectrum_free_min": min(r[2] for r in rows),

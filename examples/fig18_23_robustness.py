@@ -28,7 +28,7 @@ def main(argv=None):
         V, F, name = C.surface(args, level_quick=2)
         V2, F2 = V, F
     else:
-        lev = 2 if args.quick else 4
+        lev = 2 if args.quick else 3
         V, F = C.blob(lev)
         V2, F2 = C.blob(lev + 1)
         s = np.sqrt(sum(np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)) / 2)

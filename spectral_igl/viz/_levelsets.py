@@ -193,7 +193,8 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
             plotter.add_mesh(mesh, smooth_shading=True, show_edges=show_edges, **common)
             _add_isolines(plotter, mesh, iso, line_width)
         elif mkind == "points":
-            ps = point_size or max(4.0, 600.0 / np.sqrt(max(mesh.n_points, 1)) * 0.6)
+            panel = plotter.window_size[0] / ncol  # pixels across this panel
+            ps = point_size or max(3.0, 0.5 * panel / np.sqrt(max(mesh.n_points, 1)))
             plotter.add_mesh(mesh, render_points_as_spheres=True, point_size=ps, **common)
         else:
             _add_volume(plotter, pv, mesh, iso, volume, common, line_width)
@@ -213,7 +214,9 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         if labels is not None and title and j == 0:
             caption = f"{title}\n{caption}"
         if caption:
-            plotter.add_text(caption, position="upper_edge", font_size=11, color="black")
+            panel = plotter.window_size[0] / ncol
+            plotter.add_text(caption, position="upper_edge", color="black",
+                             font_size=int(np.clip(panel / 50, 7, 11)))
         if camera_position is not None:
             plotter.camera_position = camera_position
         elif sources is not None and np.size(sources):
