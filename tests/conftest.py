@@ -34,6 +34,18 @@ def sphere3():
     return icosphere(3)
 
 
+@pytest.fixture(scope="module")
+def one_blas_thread():
+    """Small dense factorizations run faster on one BLAS thread (and far faster on a busy machine)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # only a matter of speed
+        yield
+        return
+    with threadpool_limits(1):
+        yield
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -161,16 +161,7 @@ def test_view_screenshot(tmp_path):
     assert_not_blank(png)
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    """Small dense factorizations run faster on one BLAS thread (and far faster on a busy machine)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # only a matter of speed
-        yield
-        return
-    with threadpool_limits(1):
-        yield
+pytestmark = pytest.mark.usefixtures("one_blas_thread")
 
 
 def _dense(lap):

@@ -33,16 +33,7 @@ def colour_fraction(img, rgb, tol=60):
     return float(np.mean(d < tol))
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_blas_thread():
-    """Small dense factorizations run faster on one BLAS thread (and far faster on a busy machine)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # only a matter of speed
-        yield
-        return
-    with threadpool_limits(1):
-        yield
+pytestmark = pytest.mark.usefixtures("one_blas_thread")
 
 
 @pytest.fixture(scope="module")
