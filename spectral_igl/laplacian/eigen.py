@@ -48,11 +48,12 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto"):
     k = int(k)
     if not 1 <= k < n:
         raise ValueError(f"k must be in [1, {n - 1}] for n = {n}, got {k}")
-    Z = lap.component_basis().toarray() if c <= 64 else lap.component_basis()
+    Z = lap.component_basis()  # sparse (n, c), B-orthonormal basis of ker L
     if k <= c:
-        Zd = lap.component_basis()[:, :k].toarray()
-        return np.zeros(k), Zd
+        return np.zeros(k), Z[:, :k].toarray()
     m = k - c
+    if m >= n - c - 1 or n - c <= 3:  # ARPACK needs ncv < n - c: too few modes left
+        return dense_eigs(lap, k=k)
     B = lap.B
     # shift: any s > 0 keeps L + sB positive definite; kernel directions are projected out
     s = 1e-3 * float(lap.L.diagonal().sum() / B.diagonal().sum()) / max(n, 1) ** 0.5
@@ -66,15 +67,12 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto"):
         return project(fac.solve(x))
 
     Op = spla.LinearOperator((n, n), matvec=op, dtype=np.float64)
-    rng = np.random.default_rng(0)
-    v0 = project(rng.standard_normal(n))
-    if m >= n - c - 1 or n - c <= 3:
-        return dense_eigs(lap, k=k)
+    v0 = project(np.random.default_rng(0).standard_normal(n))
     ncv = min(n - c - 1, max(2 * m + 1, m + 32))
     vals, vecs = spla.eigsh(lap.L, k=m, M=B, sigma=-s, which="LM", OPinv=Op, v0=v0, tol=tol, ncv=ncv)
     order = np.argsort(vals)
     vals, vecs = np.maximum(vals[order], 0.0), vecs[:, order]
-    Zd = lap.component_basis().toarray() if c > 64 else Z
+    Zd = Z.toarray()
     return np.concatenate([np.zeros(c), vals]), np.hstack([Zd, vecs])
 
 
