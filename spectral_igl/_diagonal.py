@@ -10,11 +10,25 @@ of any single solve. Methods:
 ``"dense"``
     Dense generalized eigen-decomposition (n <= 8000): the ground truth. The
     decomposition is cached on the Laplacian, so further filters and times cost one
-    matrix product each. ``"auto"`` uses it for n <= 3000, where it is faster than n
-    engine applications (n = 2562: 18 s once, against 37 s per filter for ``"exact"``).
+    matrix product each. ``"auto"`` uses it for n <= 3000 when ``"selinv"`` does not
+    apply (n = 2562: 18 s once, against 37 s per filter for ``"exact"``).
 ``"eigen"``
     Truncated eigen-expansion with the ``k`` lowest eigenpairs: the classical baseline.
     No error bound; wrong by the whole omitted tail of the spectrum.
+``"selinv"``
+    Spectrum-free and exact up to a certified rational error: a partial-fraction
+    approximation :math:`r(s) = \alpha_0 + \sum_j c_j/(\sigma s - z_j)` of the filter turns
+    the diagonal into :math:`\alpha_0\,\mathrm{diag}(B^{-1}) + \sum_j c_j\,
+    \mathrm{diag}((\sigma L - z_j B)^{-1})`, and the diagonal of each inverse comes from its
+    sparse LDLᵀ factor by selected inversion (no column of the inverse is formed). The heat
+    filter uses the Carathéodory--Fejér approximant, other filters an AAA fit. The
+    commute-time kernel (:math:`s^{-1}`) is exact: :math:`G = QXQ^\top` with X the inverse of
+    the grounded stiffness and :math:`Q = I - 1w^\top` the B-orthogonal projector off ker L;
+    with a lumped mass the biharmonic kernel (:math:`s^{-2}`) is exact too, as
+    :math:`Q(XBX - \ldots)Q^\top` with :math:`XBX = (L B^{-1} L)^{-1}` on the grounded
+    vertices. Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
+    :math:`\varepsilon = \max|\varphi - r|` on the spectrum (reported as
+    ``abs_error_bound``), and the error is also measured at ``samples`` vertices.
 ``"probing"``
     Spectrum-free estimator: probing vectors built from a distance-``D`` colouring of
     the mesh graph (two vertices of one colour are more than ``D`` edges apart), so that
@@ -34,7 +48,7 @@ from .laplacian import dense_eigs, eigs
 
 __all__ = ["kernel_diagonal", "distance_colouring"]
 
-_METHODS = ("auto", "exact", "dense", "eigen", "probing")
+_METHODS = ("auto", "exact", "dense", "eigen", "selinv", "probing")
 #: ``auto`` uses ``exact`` up to this many vertices
 EXACT_MAX = 3000
 #: default colour budget of ``"probing"`` (engine applications)
@@ -201,6 +215,223 @@ def _choose_probing(lap, filt, delta, C, idx, exact, k, distance, rtol, budget):
     return defl if defl["predicted"] < plain["predicted"] else plain
 
 
+class _NoSelinv(Exception):
+    """The filter or the mass matrix is outside what ``"selinv"`` handles."""
+
+
+def selinv_supported(lap, filt, delta: str = "mass") -> bool:
+    """Whether :func:`kernel_diagonal` can use ``method="selinv"`` for this input."""
+    from . import _selinv
+
+    if not _selinv.available() or (delta == "seed" and not lap.lumped):
+        return False
+    return not getattr(filt, "is_complex", False)
+
+
+def _ldlt(lap, A):
+    from . import _selinv
+    from .solvers import ldlt_pattern
+
+    return _selinv.LDLT(A, ldlt_pattern(lap))
+
+
+def _inverse_mass_diagonal(lap):
+    """diag(B^-1): 1/m for a lumped mass, else by selected inversion (cached)."""
+    if lap.lumped:
+        return 1.0 / lap.mass
+    d = lap.cache.get("inverse_mass_diagonal")
+    if d is None:
+        from .solvers import shifted_factor
+
+        d = lap.cache["inverse_mass_diagonal"] = shifted_factor(lap, 0.0, 1.0, backend="ldlt").inverse_diagonal()
+    return d
+
+
+def _component_volume(lap):
+    """(n,) the mass 1_c^T B 1_c of each vertex's component."""
+    comp = lap.components
+    return np.bincount(comp, weights=np.asarray(lap.B.sum(axis=1)).ravel(), minlength=lap.n_components)[comp]
+
+
+def _grounded_stiffness(lap):
+    """(L_g, grounded): L with one vertex per component (largest stiffness diagonal) turned
+    into an identity row and column, so that L_g is SPD and its inverse, with zeros at the
+    grounded vertices, is the grounded pseudo-inverse X."""
+    comp = lap.components
+    diag = lap.L.diagonal()
+    order = np.lexsort((-diag, comp))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = comp[order[1:]] != comp[order[:-1]]
+    grounded = np.zeros(lap.n, dtype=bool)
+    grounded[order[first]] = True
+    keep = sp.diags((~grounded).astype(float))
+    return (keep @ lap.L @ keep + sp.diags(grounded.astype(float))).tocsr(), grounded
+
+
+def _grounded_ldlt(lap):
+    """Cached (LDLᵀ of L_g, grounded mask)."""
+    g = lap.cache.get("grounded_ldlt")
+    if g is None:
+        Lg, grounded = _grounded_stiffness(lap)
+        g = lap.cache["grounded_ldlt"] = (_ldlt(lap, Lg), grounded)
+    return g
+
+
+class _SelinvKernel:
+    r"""One approximation R of :math:`G = \varphi(\tilde L)B^{-1}` giving its diagonal (by
+    selected inversion), its columns and the per-vertex bound :math:`|G_{ii} - R_{ii}|`.
+
+    Distances built from the diagonal and a column of the same R are the exact distances
+    of R: :math:`|d^2 - d_R^2| \le \varepsilon \|B^{-1}(e_i - e_j)\|_B^2`, with no error
+    from mixing two approximations.
+    """
+
+    def __init__(self, lap, filt, tol):
+        self.lap, self.filt = lap, filt
+        p = filt.params.get("p") if filt.kind == "power" else None
+        self.power = int(round(p)) if p is not None and abs(p - round(p)) < 1e-12 and round(p) in (1, 2) else 0
+        self._diag = None
+        if self.power:
+            self.vol = _component_volume(lap)
+            self.w = np.asarray(lap.B.sum(axis=1)).ravel() / self.vol   # Q = I - 1 w^T per component
+            self.fac, self.grounded = _grounded_ldlt(lap)
+            self.eps, self.n_factorizations = 0.0, 2
+        else:
+            self._rational(tol)
+
+    # ----------------------------------------------------------------- rational filters
+    def _rational(self, tol):
+        from .approx import lambda_max, lambda_min_positive
+        from .approx._rational import RationalPlan, aaa_fit, certify, rounding
+
+        lap, filt = self.lap, self.filt
+        b = lambda_max(lap)
+        a = lambda_min_positive(lap) if filt.singular else 0.0
+        self.minv = _inverse_mass_diagonal(lap)
+        if filt.kind == "power":
+            pf = aaa_fit(filt, a, b, rtol=max(tol * 1e-3, 1e-13))
+            if pf is None:
+                raise _NoSelinv("no usable rational fit")
+            eps = certify(pf, filt, a, b) + rounding(pf, a, b, b)
+        else:
+            if filt.kind == "heat":
+                # |error_i| <= eps (B^-1)_ii and G_ii >= 1/V_c (the constant mode): this
+                # eps makes the error at most tol G_ii at every vertex
+                tol = max(tol * float(np.min(1.0 / (_component_volume(lap) * self.minv))), 1e-15)
+            try:
+                plan = RationalPlan(lap, filt, a, b, tol)
+            except (ValueError, RuntimeError) as exc:
+                raise _NoSelinv(str(exc)) from None
+            pf, eps = plan.pf, plan.scalar_error + plan.rounding
+        for c, z, k in pf.terms:
+            # a real pole inside the spectrum's hull makes sigma L - z B indefinite
+            if abs(z.imag) <= 1e-12 * max(1.0, abs(z)) and 0.0 <= z.real / pf.sigma <= b:
+                raise _NoSelinv(f"real pole {z.real / pf.sigma:.3g} inside the spectrum")
+            if filt.singular and abs(z / pf.sigma) < 0.5 * a:   # ker L would dominate that term
+                raise _NoSelinv(f"pole {z / pf.sigma:.3g} too close to the singularity at 0")
+        self.pf, self.eps, self.n_factorizations = pf, eps, len(pf.terms)
+
+    def _factors(self):
+        from .solvers import shifted_factor
+
+        for c, z, k in self.pf.terms:
+            theta = -z.real if z.imag == 0 else -z
+            yield c, k, shifted_factor(self.lap, self.pf.sigma, theta, backend="ldlt")
+
+    def _kernel_part(self):
+        """r(0) / V_c: what r puts on ker L, where a singular filter is 0."""
+        return float(np.real(self.pf(np.zeros(1))[0])) / _component_volume(self.lap)
+
+    # ----------------------------------------------------------------- exact powers
+    def _X(self, b):
+        """The grounded pseudo-inverse X (zero rows at the grounded vertices)."""
+        x = self.fac.solve(b)
+        x[self.grounded] = 0.0
+        return x
+
+    def _commute(self, V):
+        r""":math:`Q X Q^\top V` for V of shape (n, k): the kernel of :math:`s^{-1}`."""
+        w = self.w[:, None]
+        Y = self._X(V - w * np.stack([self._comp_sum(v) for v in V.T], axis=1))
+        return Y - np.stack([self._comp_sum(self.w * y) for y in Y.T], axis=1)
+
+    # ----------------------------------------------------------------- public
+    def columns(self, E):
+        """R E for E of shape (n, k)."""
+        lap = self.lap
+        if self.power == 1:
+            return self._commute(E)
+        if self.power == 2:                 # G = G_c B G_c
+            return self._commute(lap.B @ self._commute(E))
+        out = np.zeros(E.shape)
+        for c, k, fac in self._factors():
+            out += k * (c * fac.solve(E)).real       # a conjugate pair (k = 2): 2 Re(c x)
+        from .solvers import mass_solve
+
+        out += self.pf.alpha0.real * mass_solve(lap, E, backend="ldlt")
+        if self.filt.singular:
+            out -= self._kernel_part()[:, None] * np.stack([self._comp_sum(e) for e in E.T], axis=1)
+        return out
+
+    def _comp_sum(self, e):
+        r"""(1_c 1_c^\top e) per component: the kernel projector's column without 1/V."""
+        comp = self.lap.components
+        return np.bincount(comp, weights=e, minlength=self.lap.n_components)[comp]
+
+    def diagonal(self):
+        """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
+        if self._diag is None:
+            self._diag = self._power_diagonal() if self.power else self._rational_diagonal()
+        return self._diag
+
+    def _rational_diagonal(self):
+        diag = np.zeros(self.lap.n)
+        for c, k, fac in self._factors():
+            diag += k * (c * fac.inverse_diagonal()).real
+        diag += self.pf.alpha0.real * self.minv
+        if self.filt.singular:
+            diag -= self._kernel_part()
+        return diag, self.eps * self.minv
+
+    def _power_diagonal(self):
+        lap, w, vol = self.lap, self.w, self.vol
+        u = self._X(w)
+        if self.power == 1:
+            xd = self.fac.inverse_diagonal()
+            xd[self.grounded] = 0.0
+            mdiag, Mw = xd, u
+        else:
+            # G = Q (X B X - V u u^T) Q^T, since Q^T B Q = B - V w w^T per component.
+            # diag(X B X) is the derivative at z = 0 of diag((L_g - z B_g)^-1) (B_g: B
+            # without the grounded rows), taken by a complex step: Im diag((L_g - ihB_g)^-1)/h
+            # is sum_l x_l(i)^2 / (mu_l^2 + h^2), exact to rounding for h = 1e-20 lambda_max,
+            # and nothing cancels.
+            from .approx import lambda_max
+
+            h = 1e-20 * lambda_max(lap)
+            Lg, _ = _grounded_stiffness(lap)
+            keep = sp.diags((~self.grounded).astype(float))
+            step = _ldlt(lap, (Lg - 1j * h * (keep @ lap.B @ keep)).tocsr())
+            xbx = step.inverse_diagonal().imag / h
+            xbx[self.grounded] = 0.0
+            mdiag = xbx - vol * u * u
+            Mw = self._X(lap.B @ u) - vol * u * self._comp_sum(u * w)
+        # diag(Q M Q^T) = M_ii - 2 (M w)_i + (w^T M w)_c(i)
+        return mdiag - 2.0 * Mw + self._comp_sum(w * Mw), np.zeros(lap.n)
+
+
+def _selinv_kernel(lap, filt, tol) -> _SelinvKernel:
+    """The :class:`_SelinvKernel` of ``filt``, cached on ``lap`` while the filter lives."""
+    import weakref
+
+    cache = lap.cache.setdefault("selinv_kernels", weakref.WeakKeyDictionary())
+    kern = cache.get(filt, {}).get(tol)
+    if kern is None:
+        kern = _SelinvKernel(lap, filt, tol)
+        cache.setdefault(filt, {})[tol] = kern
+    return kern
+
+
 def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int | None = None,
                     distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
                     max_colours: int | None = None, tol: float = 1e-8,
@@ -215,9 +446,10 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     filt : Filter
         The filter whose kernel diagonal is wanted (for spectral distances pass
         :math:`|\varphi|^2`, see :func:`spectral_igl.kernels.abs_square`).
-    method : {"auto", "exact", "probing", "eigen", "dense"}
-        See the module notes. ``"auto"``: ``"dense"`` (cached) for ``n <= 3000``, else
-        ``"probing"``.
+    method : {"auto", "exact", "dense", "selinv", "probing", "eigen"}
+        See the module notes. ``"auto"``: ``"selinv"``; where it does not apply (a complex
+        filter, ``delta="seed"`` with a full mass matrix, a fit with poles near 0 such as
+        :math:`s^{-3}`), ``"dense"`` (cached) for ``n <= 3000``, else ``"probing"``.
     delta : {"mass", "seed"}
         ``"seed"`` gives the diagonal of :math:`B\varphi(\tilde L)` (the seed-delta Gram
         matrix).
@@ -234,6 +466,9 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         ``"probing"``: vertices at which the exact kernel column is computed; they set
         the choices above and measure the error (reported in ``info``), and are exact
         in the output. At least 1 unless both ``k`` and ``distance`` are given.
+        ``"selinv"``: vertices where the selected inversion is checked against solves
+        with the same factors (0 to skip); the approximation error itself is certified
+        (``abs_error_bound``).
     rtol : float
         ``"probing"``: relative accuracy aimed at when choosing ``k`` and ``distance``
         (the reported error is measured, not this target).
@@ -261,8 +496,9 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     n, c = lap.n, lap.n_components
-    if method == "auto":
-        method = "dense" if n <= EXACT_MAX else "probing"
+    auto = method == "auto"
+    if auto:
+        method = "selinv" if selinv_supported(lap, filt, delta) else ("dense" if n <= EXACT_MAX else "probing")
     info = {"method": method, "applications": 0, "k": 0, "distance": None, "colours": None}
     cplx = bool(getattr(filt, "is_complex", False))
     dtype = np.complex128 if cplx else np.float64
@@ -282,6 +518,38 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         lam, W = _low_rank(lap, k, delta)
         diag = (W ** 2) @ _phi_values(filt, lam, c)
         info["k"] = k
+        return (diag, info) if return_info else diag
+
+    if method == "selinv":
+        if not selinv_supported(lap, filt, delta):
+            raise ValueError("method='selinv' needs the compiled extension and pymetis, a real filter, "
+                             "and a lumped mass for delta='seed'")
+        try:
+            kern = _selinv_kernel(lap, filt, tol)
+            diag, bound = kern.diagonal()
+            nfac = kern.n_factorizations
+        except _NoSelinv as exc:
+            if not auto:
+                raise ValueError(f"method='selinv' cannot handle {filt.name!r}: {exc}; use 'probing'") from None
+            return kernel_diagonal(lap, filt, "dense" if n <= EXACT_MAX else "probing", delta, k, distance,
+                                   samples, rtol, max_colours, tol, engine_method, seed, return_info)
+        if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
+            diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
+        info.update(factorizations=nfac, abs_error_bound=float(bound.max(initial=0.0)))
+        samples = int(min(max(samples, 0), n))
+        if samples:     # the selected inversion against solves with the same factors
+            rng = np.random.default_rng(seed)
+            idx = np.sort(rng.choice(n, samples, replace=False))
+            E = np.zeros((n, samples))
+            E[idx, np.arange(samples)] = 1.0
+            if delta == "seed":
+                E *= lap.mass[:, None]
+            exact = kern.columns(E)[idx, np.arange(samples)]
+            if delta == "seed":
+                exact *= lap.mass[idx]
+            err = np.abs(diag[idx] - exact)
+            info.update(samples=idx, sample_abs_error=float(err.max()),
+                        sample_rel_error=float(np.max(err / np.maximum(np.abs(exact), np.finfo(float).tiny))))
         return (diag, info) if return_info else diag
 
     op = _operator(lap, filt, engine_method, tol)

@@ -3,7 +3,9 @@
 ``factorize(A)`` returns an object with ``.solve(b)`` for ``b`` of shape (n,) or (n, k).
 Real symmetric positive definite matrices go to CHOLMOD (through cholespy) by
 default, to MKL PARDISO (pypardiso) when asked, and to SuperLU as the fallback;
-complex matrices always go to SuperLU.
+complex matrices to SuperLU. ``"ldlt"`` is the package's own supernodal LDLᵀ without
+pivoting (:mod:`spectral_igl._selinv`), for definite real or complex symmetric matrices;
+it also gives the diagonal of the inverse.
 """
 from __future__ import annotations
 
@@ -23,6 +25,10 @@ def available_backends() -> list[str]:
         out.append("cholespy")
     if importlib.util.find_spec("pypardiso") is not None:
         out.append("pypardiso")
+    from . import _selinv
+
+    if _selinv.available():
+        out.append("ldlt")
     out.append("superlu")
     return out
 
@@ -40,9 +46,10 @@ class Factor:
         if backend == "auto":
             backend = "cholespy" if (spd and self.dtype == np.float64
                                      and "cholespy" in available_backends()) else "superlu"
-        if backend not in ("cholespy", "pypardiso", "superlu"):
-            raise ValueError(f"backend must be 'auto', 'cholespy', 'pypardiso' or 'superlu', got {backend!r}")
-        if backend != "superlu" and self.dtype != np.float64:
+        if backend not in ("cholespy", "pypardiso", "ldlt", "superlu"):
+            raise ValueError(f"backend must be 'auto', 'cholespy', 'pypardiso', 'ldlt' or 'superlu', "
+                             f"got {backend!r}")
+        if backend not in ("superlu", "ldlt") and self.dtype != np.float64:
             backend = "superlu"
         self.backend = backend
         if backend == "cholespy":
@@ -52,6 +59,10 @@ class Factor:
             A.sort_indices()
             self._chol = CholeskySolverD(n, A.indptr.astype(np.int32), A.indices.astype(np.int32),
                                          A.data.astype(np.float64), MatrixType.CSR)
+        elif backend == "ldlt":
+            from ._selinv import LDLT
+
+            self._ldlt = LDLT(A)
         elif backend == "pypardiso":
             import pypardiso
 
@@ -73,6 +84,8 @@ class Factor:
             x = np.empty_like(b)
             self._chol.solve(b, x)
             return x
+        if self.backend == "ldlt":
+            return self._ldlt.solve(b)
         if self.backend == "pypardiso":
             x = self._pardiso.solve(self._A, np.ascontiguousarray(b, dtype=np.float64))
             return x.reshape(b.shape)

@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-from ._diagonal import EXACT_MAX, kernel_diagonal
+from ._diagonal import EXACT_MAX, _selinv_kernel, kernel_diagonal
 from ._validate import as_index, as_indices, as_positive
 from .kernels import (
     _check_delta,
@@ -136,32 +136,47 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
 
     # one-to-all: column of G, diagonal of G
     G2 = abs_square(filt)
-    op2 = _operator(lap, G2, method, tol)
-    e = np.zeros((n, 1))
-    e[s] = 1.0
-    col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
-    col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
-    col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
                                   engine_method=method, return_info=True)
     diag = np.real(diag)
     info.update(dinfo)
-    d2 = diag[s] + diag - 2.0 * col
-    d2[s] = 0.0
-    # error of each d^2 entry: the diagonal's (bound or measured sample error), the
-    # column's certified bound, and rounding of the cancellation
-    if dinfo["method"] == "exact":
-        derr = dinfo.get("abs_error_bound", np.nan)
+    e = np.zeros((n, 1))
+    e[s] = 1.0
+    if dinfo["method"] == "selinv":
+        # the column from the same approximation R as the diagonal: d^2 is then R's own
+        # squared distance, |d^2 - d_R^2| <= eps ||B^-1(e_i - e_s)||_B^2 <= 2 (bound_i + bound_s)
+        kern = _selinv_kernel(lap, G2, tol)
+        bound = kern.diagonal()[1]
+        if delta == "mass":
+            col = kern.columns(e)[:, 0]
+        else:
+            col = lap.mass * kern.columns(e * lap.mass[:, None])[:, 0]
+            bound = bound * lap.mass ** 2
+        d2 = diag[s] + diag - 2.0 * col
+        d2[s] = 0.0
+        scale = np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col)
+        thr = 2.0 * (bound + bound[s]) + 64.0 * np.finfo(float).eps * scale
     else:
-        derr = 10.0 * dinfo.get("sample_abs_error", np.nan)
-    if not np.isfinite(derr):
-        derr = 0.0
-    minv = 1.0 / lap.mass
-    fac = 1.0 if lap.lumped else 5.0
-    cerr = col_bound * np.sqrt(fac * minv * minv[s]) if delta == "mass" else 0.0
-    scale = np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col)
-    thr = 2.0 * derr + 2.0 * cerr + 64.0 * np.finfo(float).eps * scale
+        op2 = _operator(lap, G2, method, tol)
+        col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
+        col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
+        col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
+        d2 = diag[s] + diag - 2.0 * col
+        d2[s] = 0.0
+        # error of each d^2 entry: the diagonal's (bound or measured sample error), the
+        # column's certified bound, and rounding of the cancellation
+        if dinfo["method"] == "exact":
+            derr = dinfo.get("abs_error_bound", np.nan)
+        else:
+            derr = 10.0 * dinfo.get("sample_abs_error", np.nan)
+        if not np.isfinite(derr):
+            derr = 0.0
+        minv = 1.0 / lap.mass
+        fac = 1.0 if lap.lumped else 5.0
+        cerr = col_bound * np.sqrt(fac * minv * minv[s]) if delta == "mass" else 0.0
+        scale = np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col)
+        thr = 2.0 * derr + 2.0 * cerr + 64.0 * np.finfo(float).eps * scale
     redo = np.flatnonzero(d2 <= thr)
     redo = redo[redo != s]
     unverified = redo[:0]

@@ -2,13 +2,15 @@ r"""Cached sparse factorizations of the shifted matrices :math:`\theta B + \beta
 
 Every spectrum-free method reduces to solves with matrices shaped like the mesh:
 :math:`B + \beta L` (real shifts, symmetric positive definite: Cholesky), :math:`tL - \theta B`
-(complex poles: complex LU, one per conjugate pair), :math:`B` itself, and the grounded
+(complex poles: one complex symmetric LDLᵀ per conjugate pair), :math:`B` itself, and the grounded
 stiffness for pseudo-inverses. The factorizations live in ``lap.cache`` so that repeated
 calls on one shape -- other right-hand sides, other filters with the same poles -- never
 refactor.
 
 Backends: CHOLMOD through cholespy (default for real SPD matrices), MKL PARDISO through
-pypardiso (``backend="pypardiso"``), SuperLU for complex matrices and as the fallback.
+pypardiso (``backend="pypardiso"``), the package's supernodal LDLᵀ (``"ldlt"``, default
+for complex symmetric matrices with a definite real or imaginary part, and the one that
+gives selected inverses), SuperLU for indefinite matrices and as the fallback.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse as sp
 
+from . import _selinv
 from ._factor import available_backends, factorize
 from ._validate import as_signal, describe
 from .laplacian import Laplacian
@@ -41,6 +44,20 @@ def _check_backend(backend: str) -> str:
     return backend
 
 
+def _ldlt_safe(beta, theta) -> bool:
+    """True when theta B + beta L has a definite real or imaginary part (no pivoting needed)."""
+    beta, theta = complex(beta), complex(theta)
+    return (theta.real > 0 and beta.real >= 0) or (theta.imag != 0 and theta.imag * beta.imag >= 0)
+
+
+def ldlt_pattern(lap: Laplacian):
+    """The ordering and symbolic LDLᵀ analysis of the pattern of L + B, cached on ``lap``."""
+    pat = lap.cache.get("ldlt_pattern")
+    if pat is None:
+        pat = lap.cache["ldlt_pattern"] = _selinv.Pattern(abs(lap.L) + abs(lap.B))
+    return pat
+
+
 def _scalar(x, name):
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Number, np.number)):
         raise TypeError(f"{name} must be a number, got {describe(x)}")
@@ -58,8 +75,9 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     lap : Laplacian
     beta, theta : float or complex
         Real ``theta > 0, beta >= 0`` gives a symmetric positive definite matrix
-        (Cholesky); complex values give a complex symmetric matrix (SuperLU).
-    backend : {"auto", "cholespy", "pypardiso", "superlu"}
+        (Cholesky); complex values give a complex symmetric matrix (LDLᵀ when its real or
+        imaginary part is definite, else SuperLU).
+    backend : {"auto", "cholespy", "pypardiso", "ldlt", "superlu"}
 
     Returns
     -------
@@ -81,6 +99,8 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     backend = _check_backend(backend)
     cplx = isinstance(beta, complex) or isinstance(theta, complex)
     spd = (not cplx) and theta > 0 and beta >= 0
+    if cplx and backend == "auto" and _ldlt_safe(beta, theta) and _selinv.available():
+        backend = "ldlt"
     key = ("shifted", beta, theta, backend)
     cache = lap.cache.setdefault("factors", OrderedDict())
     fac = cache.get(key)
@@ -89,7 +109,14 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
         return fac
     if cplx:
         A = (theta * lap.B.astype(np.complex128) + beta * lap.L.astype(np.complex128)).tocsr()
-        fac = factorize(A, backend="superlu", spd=False)
+        if backend == "ldlt" and _ldlt_safe(beta, theta):
+            fac = _selinv.LDLT(A, ldlt_pattern(lap))
+        else:
+            fac = factorize(A, backend="superlu", spd=False)
+    elif backend == "ldlt":
+        if not (spd or _ldlt_safe(beta, theta)):
+            raise ValueError(f"backend 'ldlt' needs a definite matrix, got beta={beta}, theta={theta}")
+        fac = _selinv.LDLT((theta * lap.B + beta * lap.L).tocsr(), ldlt_pattern(lap))
     else:
         A = (theta * lap.B + beta * lap.L).tocsr()
         if spd:
