@@ -8,6 +8,7 @@ value; the truncated-eigenpair baseline (eigsh, k = 100 and 500) is shown beside
     python benchmarks/one_to_all.py            # icosphere level 7, n = 163,842
     python benchmarks/one_to_all.py --quick    # level 5, n = 10,242
     python benchmarks/one_to_all.py --torus 100000 --ks 100   # a 100k-vertex torus
+    python benchmarks/one_to_all.py --mesh ../shared/data/meshes/armadillo.obj --upsample 1 --ks 100
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--level", type=int, default=7, help="icosphere level (7: 163k vertices)")
     ap.add_argument("--mesh", help="a mesh file instead of the icosphere")
+    ap.add_argument("--upsample", type=int, default=0, help="midpoint subdivisions of --mesh (x4 faces each)")
     ap.add_argument("--quick", action="store_true", help="level 5 and k = 100 only")
     ap.add_argument("--checks", type=int, default=24, help="check vertices for the errors")
     ap.add_argument("--ks", default="100,500", help="eigsh baselines")
@@ -50,6 +52,10 @@ def main():
         from spectral_igl.io import read_mesh
 
         V, F = read_mesh(args.mesh)
+        if args.upsample:
+            import igl
+
+            V, F = igl.upsample(V, F, args.upsample)
     else:
         V, F = icosphere(5 if args.quick else args.level)
     lap0 = sig.laplacian(V, F)

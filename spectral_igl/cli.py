@@ -127,10 +127,10 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "exact", "probing", "dense"),
-                   help="distances: how the kernel diagonal is obtained (exact: one application "
-                        "per vertex; probing: colouring estimator; default auto: exact up to "
-                        "3000 vertices)")
+    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+                   help="distances: how the kernel diagonal is obtained (selinv: selected "
+                        "inversion, certified; exact: one application per vertex; probing: "
+                        "colouring estimator; default auto: selinv where it applies)")
 
 
 def build_parser():
@@ -175,10 +175,10 @@ def build_parser():
                    help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "exact", "probing", "dense"),
-                   help="how the diagonal K_t(i, i) is obtained: exact (one application per "
-                        "vertex), probing (colouring estimator), dense; default auto (exact "
-                        "up to 3000 vertices)")
+    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+                   help="how the diagonal K_t(i, i) is obtained: selinv (selected inversion, "
+                        "certified), exact (one application per vertex), probing (colouring "
+                        "estimator), dense; default auto (selinv)")
     p.add_argument("--tol", type=_positive, default=1e-8)
 
     p = sub.add_parser("smooth", help="diffusion smoothing of a signal or of the shape itself",

@@ -28,9 +28,8 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     lap : Laplacian
     filt : Filter
     method : str
-        Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: exact, by a
-        cached dense eigendecomposition, for n <= 3000, else the probing estimator with
-        measured accuracy).
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: selected
+        inversion of a rational approximation, with a certified error bound).
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal` (``k``, ``distance``,
         ``return_info``, ...).
@@ -88,7 +87,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         ``energies`` (Aubry's choice), required for a single energy.
     k : int
         Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
-    method : {"eigen", "auto", "exact", "probing", "dense"}
+    method : {"eigen", "auto", "selinv", "exact", "probing", "dense"}
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
         :math:`\psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
         :math:`\operatorname{tr}\psi_e(\tilde L)` is then :math:`\sum_i m_i K(i,i)`,

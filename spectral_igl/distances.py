@@ -85,7 +85,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         ``"mass"`` (default): :math:`B^{-1}e_i`, converges under refinement. ``"seed"``:
         :math:`e_i` as printed in the survey's Eq. (5); mesh dependent.
     method, tol : engine approximation method and accuracy.
-    diagonal : {"auto", "exact", "probing", "eigen", "dense"}
+    diagonal : {"auto", "selinv", "exact", "probing", "eigen", "dense"}
         How :math:`G_{jj}` is obtained for one-to-all (see
         :func:`spectral_igl.kernel_diagonal`). ``"eigen"`` returns the classical
         truncated-eigenpair distance with ``k`` pairs (baseline; no error bound).

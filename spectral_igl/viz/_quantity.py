@@ -94,7 +94,7 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         Time/scale of the filters that take one.
     method, tol
         Passed to the spectrum-free engine.
-    diagonal : {"auto", "exact", "probing", "dense"}
+    diagonal : {"auto", "selinv", "exact", "probing", "dense"}
         How a one-to-all distance obtains the kernel diagonal
         (:func:`spectral_igl.spectral_distance`).
 

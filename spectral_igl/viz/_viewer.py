@@ -44,7 +44,7 @@ class Viewer:
         Number of iso-lines.
     off_screen : bool, optional
         Default: off screen when there is no display.
-    diagonal : {"auto", "exact", "probing", "dense"}
+    diagonal : {"auto", "selinv", "exact", "probing", "dense"}
         How distances obtain the kernel diagonal (see :func:`spectral_igl.spectral_distance`).
 
     Examples
