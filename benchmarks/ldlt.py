@@ -17,20 +17,14 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 import spectral_igl as sig
+from data_generators import torus
 from spectral_igl._factor import factorize
 from spectral_igl._selinv import LDLT, Pattern
 
 
-def torus(n):
+def unit_torus(n):
     nv = int(round(np.sqrt(n / 2.5)))
-    nu = int(round(n / nv))
-    u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv, indexing="ij")
-    u, v = u.ravel(), v.ravel()
-    V = np.c_[(1 + 0.4 * np.cos(v)) * np.cos(u), (1 + 0.4 * np.cos(v)) * np.sin(u), 0.4 * np.sin(v)]
-    idx = np.arange(nu * nv).reshape(nu, nv)
-    a, b = idx, np.roll(idx, -1, axis=0)
-    c, d = np.roll(idx, -1, axis=1), np.roll(np.roll(idx, -1, axis=0), -1, axis=1)
-    F = np.vstack([np.c_[a.ravel(), b.ravel(), d.ravel()], np.c_[a.ravel(), d.ravel(), c.ravel()]])
+    V, F = torus(1.0, 0.4, n_major=int(round(n / nv)), n_minor=nv)
     return V / np.sqrt(sig.laplacian(V, F).area()), F
 
 
@@ -46,7 +40,7 @@ def main():
     args = ap.parse_args()
     rows = []
     for n in args.n:
-        lap = sig.laplacian(*torus(n))
+        lap = sig.laplacian(*unit_torus(n))
         n = lap.n
         A = (lap.B + 1e-3 * lap.L).tocsr()
         Z = (1e-3 * lap.L - (-2 + 3j) * lap.B).tocsc()

@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 import spectral_igl as sig
-from data_generators import icosphere
+from data_generators import icosphere, torus
 from spectral_igl import filters
 from spectral_igl._factor import factorize
 
@@ -41,14 +41,7 @@ def main():
     args = ap.parse_args()
     if args.torus:
         nv = int(round(np.sqrt(args.torus / 2.5)))
-        nu = int(round(args.torus / nv))
-        u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv, indexing="ij")
-        u, v = u.ravel(), v.ravel()
-        V = np.c_[(1 + 0.4 * np.cos(v)) * np.cos(u), (1 + 0.4 * np.cos(v)) * np.sin(u), 0.4 * np.sin(v)]
-        idx = np.arange(nu * nv).reshape(nu, nv)
-        a, b = idx, np.roll(idx, -1, axis=0)
-        c, d = np.roll(idx, -1, axis=1), np.roll(np.roll(idx, -1, axis=0), -1, axis=1)
-        F = np.vstack([np.c_[a.ravel(), b.ravel(), d.ravel()], np.c_[a.ravel(), d.ravel(), c.ravel()]])
+        V, F = torus(1.0, 0.4, n_major=int(round(args.torus / nv)), n_minor=nv)
     elif args.mesh:
         from spectral_igl.io import read_mesh
 

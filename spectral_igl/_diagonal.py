@@ -257,13 +257,9 @@ def _grounded_stiffness(lap):
     """(L_g, grounded): L with one vertex per component (largest stiffness diagonal) turned
     into an identity row and column, so that L_g is SPD and its inverse, with zeros at the
     grounded vertices, is the grounded pseudo-inverse X."""
-    comp = lap.components
-    diag = lap.L.diagonal()
-    order = np.lexsort((-diag, comp))
-    first = np.ones(order.size, dtype=bool)
-    first[1:] = comp[order[1:]] != comp[order[:-1]]
-    grounded = np.zeros(lap.n, dtype=bool)
-    grounded[order[first]] = True
+    from .solvers import grounded_vertices
+
+    grounded = grounded_vertices(lap)
     keep = sp.diags((~grounded).astype(float))
     return (keep @ lap.L @ keep + sp.diags(grounded.astype(float))).tocsr(), grounded
 

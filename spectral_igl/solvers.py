@@ -138,21 +138,25 @@ def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarr
     return shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
 
 
+def grounded_vertices(lap: Laplacian) -> np.ndarray:
+    """(n,) bool: one vertex per component, the one of largest stiffness diagonal (best pivot),
+    whose row and column are removed to make L definite."""
+    comp = lap.components
+    order = np.lexsort((-lap.L.diagonal(), comp))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = comp[order[1:]] != comp[order[:-1]]
+    grounded = np.zeros(lap.n, dtype=bool)
+    grounded[order[first]] = True
+    return grounded
+
+
 def _grounded(lap: Laplacian, backend: str = "auto"):
     """Factor of L with one vertex per component removed (SPD), and the kept indices."""
     key = ("grounded", backend)
     g = lap.cache.get(key)
     if g is not None:
         return g
-    comp = lap.components
-    # ground the vertex of largest stiffness diagonal in each component (best pivot)
-    diag = lap.L.diagonal()
-    order = np.lexsort((-diag, comp))
-    first = np.ones(order.size, dtype=bool)
-    first[1:] = comp[order[1:]] != comp[order[:-1]]
-    grounded = np.zeros(lap.n, dtype=bool)
-    grounded[order[first]] = True
-    keep = np.flatnonzero(~grounded)
+    keep = np.flatnonzero(~grounded_vertices(lap))
     fac = None
     if keep.size:
         Lr = lap.L[keep][:, keep].tocsr()
