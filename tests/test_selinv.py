@@ -117,3 +117,17 @@ def test_selinv_one_to_all_distances_match_dense(lap_torus, delta):
             assert np.all(d >= 0) and d[src] == 0.0
             assert np.abs(d - ref).max() <= 1e-7 * ref.max()
             assert info["d2_error_bound"] <= 1e-6 * ref.max() ** 2
+
+
+@pytest.mark.parametrize("t", [1e-5, 1e-3, 1e-1])
+def test_selinv_one_to_all_at_10k_matches_exact_norms(t):
+    """Above the dense range auto uses selinv: every d >= 0 and d equals the exact B-norm."""
+    lap = sig.laplacian(*icosphere(5))                    # n = 10,242, unit sphere
+    src = 17
+    d, info = sig.diffusion_distance(lap, t, src, return_info=True)
+    assert info["method"] == "selinv" and lap.n > 3000
+    assert np.all(np.isfinite(d)) and np.all(d >= 0) and d[src] == 0.0
+    rng = np.random.default_rng(1)
+    targets = np.r_[rng.choice(lap.n, 6, replace=False), np.flatnonzero(lap.L[[src]].toarray()[0])[:2]]
+    exact = sig.diffusion_distance(lap, t, src, targets=targets)   # norms of filtered differences
+    assert np.abs(d[targets] - exact).max() <= 1e-7 * d.max()
