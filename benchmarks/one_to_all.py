@@ -31,7 +31,7 @@ def main():
     ap.add_argument("--upsample", type=int, default=0, help="midpoint subdivisions of --mesh (x4 faces each)")
     ap.add_argument("--quick", action="store_true", help="level 5 and k = 100 only")
     ap.add_argument("--checks", type=int, default=24, help="check vertices for the errors")
-    ap.add_argument("--ks", default="100,500", help="eigsh baselines")
+    ap.add_argument("--ks", default="100,500", help="eigsh baselines (0: none)")
     ap.add_argument("--torus", type=int, help="a torus (R = 1, r = 0.4) with about this many vertices")
     ap.add_argument("--max-colours", type=int, default=None, help="probing colour budget")
     ap.add_argument("--max-recompute", type=int, default=None,
@@ -56,7 +56,7 @@ def main():
     V = V / np.sqrt(lap0.area())          # unit area
     lap = sig.laplacian(V, F)
     n = lap.n
-    ks = [100] if args.quick else [int(k) for k in args.ks.split(",")]
+    ks = [100] if args.quick else [int(k) for k in args.ks.split(",") if k.strip() and int(k) > 0]
     print(f"mesh: n = {n}, unit area, cotan + full mass", flush=True)
 
     t0 = time.perf_counter()

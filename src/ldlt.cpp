@@ -350,29 +350,46 @@ struct Factor {
         }
     }
 
-    // x <- A^-1 x for x in internal order, one column
-    void solve_internal(T *x) const {
+    // X <- A^-1 X for X (n x k, row-major) in internal order: all k columns together
+    void solve_internal(T *x, const size_t k) const {
+        if (k == 1) solve_block<1>(x, 1);     // the compiler unrolls the one-column case
+        else solve_block<0>(x, k);
+    }
+
+    template <size_t K>
+    void solve_block(T *x, size_t k_dyn) const {
+        const size_t k = K ? K : k_dyn;
         const Symbolic &s = *S;
         for (int J = 0; J < s.ns; ++J) {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
-            for (int k = 0; k < nc; ++k) {
-                const T xk = x[f + k];
-                const T *Pk = P + size_t(k) * m;
-                for (int i = k + 1; i < m; ++i) x[r[i]] -= Pk[i] * xk;
+            for (int kc = 0; kc < nc; ++kc) {
+                const T *xk = x + size_t(f + kc) * k;
+                const T *Pk = P + size_t(kc) * m;
+                for (int i = kc + 1; i < m; ++i) {
+                    const T l = Pk[i];
+                    T *xi = x + size_t(r[i]) * k;
+                    for (size_t c = 0; c < k; ++c) xi[c] -= l * xk[c];
+                }
             }
         }
-        for (int i = 0; i < s.n; ++i) x[i] /= D[i];
+        for (int i = 0; i < s.n; ++i) {
+            const T dinv = T(1) / D[i];
+            for (size_t c = 0; c < k; ++c) x[size_t(i) * k + c] *= dinv;
+        }
         for (int J = s.ns - 1; J >= 0; --J) {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
-            for (int k = nc - 1; k >= 0; --k) {
-                const T *Pk = P + size_t(k) * m;
-                T acc = x[f + k];
-                for (int i = k + 1; i < m; ++i) acc -= Pk[i] * x[r[i]];
-                x[f + k] = acc;
+            for (int kc = nc - 1; kc >= 0; --kc) {
+                const T *Pk = P + size_t(kc) * m;
+                T *xk = x + size_t(f + kc) * k;
+                for (int i = kc + 1; i < m; ++i) {
+                    const T l = Pk[i];
+                    const T *xi = x + size_t(r[i]) * k;
+                    for (size_t c = 0; c < k; ++c) xk[c] -= l * xi[c];
+                }
             }
         }
     }
@@ -498,12 +515,12 @@ void bind_factor(nb::module_ &mod, const char *name) {
                  const T *bd = b.data();
                  {
                      nb::gil_scoped_release rel;
-                     std::vector<T> x(n);
-                     for (size_t c = 0; c < k; ++c) {
-                         for (size_t q = 0; q < n; ++q) x[q] = bd[size_t(s.perm[q]) * k + c];
-                         F.solve_internal(x.data());
-                         for (size_t q = 0; q < n; ++q) out[size_t(s.perm[q]) * k + c] = x[q];
-                     }
+                     std::vector<T> x(n * k);
+                     for (size_t q = 0; q < n; ++q)
+                         std::copy(bd + size_t(s.perm[q]) * k, bd + size_t(s.perm[q]) * k + k, x.begin() + q * k);
+                     F.solve_internal(x.data(), k);
+                     for (size_t q = 0; q < n; ++q)
+                         std::copy(x.begin() + q * k, x.begin() + q * k + k, out.begin() + size_t(s.perm[q]) * k);
                  }
                  return to_numpy<T>(std::move(out), {n, k});
              },
