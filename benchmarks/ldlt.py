@@ -7,6 +7,7 @@ apart, once per pattern). Accuracy: the relative residual of a solve, and the se
 inverse against solves with unit vectors at 8 vertices.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/ldlt.py --n 10000 100000
+    OPENBLAS_NUM_THREADS=1 python benchmarks/ldlt.py --n --tets 35      # a 35^3-cell tet box (3D fill)
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 import spectral_igl as sig
-from data_generators import torus
+from data_generators import box_tets, torus
 from spectral_igl._factor import factorize
 from spectral_igl._selinv import LDLT, Pattern
 
@@ -36,11 +37,13 @@ def timed(fn):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, nargs="+", default=[10000, 100000])
+    ap.add_argument("--n", type=int, nargs="*", default=[10000, 100000], help="torus sizes")
+    ap.add_argument("--tets", type=int, nargs="*", default=[], help="tet boxes with S^3 cells")
     args = ap.parse_args()
     rows = []
-    for n in args.n:
-        lap = sig.laplacian(*unit_torus(n))
+    shapes = [("torus", n) for n in args.n] + [("tets", s) for s in args.tets]
+    for kind, size in shapes:
+        lap = sig.laplacian(*(unit_torus(size) if kind == "torus" else box_tets((size, size, size))))
         n = lap.n
         A = (lap.B + 1e-3 * lap.L).tocsr()
         Z = (1e-3 * lap.L - (-2 + 3j) * lap.B).tocsc()
@@ -58,7 +61,7 @@ def main():
         E = np.zeros((n, 8))
         E[idx, np.arange(8)] = 1.0
         sel = np.abs(dz[idx] - fz.solve(E)[idx, np.arange(8)]).max() / np.abs(dz[idx]).max()
-        rows.append([f"{n:,}", f"{pat.nnz_L:,}", f"{t_chol:.2f}", f"{t_pat:.2f}",
+        rows.append([f"{n:,}" + (" (tets)" if kind == "tets" else ""), f"{pat.nnz_L:,}", f"{t_chol:.2f}", f"{t_pat:.2f}",
                      f"{t_f:.2f} ({t_f / t_chol:.2f}x)", f"{t_d:.2f}", f"{t_fz:.2f}", f"{t_dz:.2f}",
                      f"{t_lu:.2f} ({t_lu / t_fz:.0f}x ours)", f"{res:.1e}", f"{sel:.1e}"])
         print(" | ".join(rows[-1]), flush=True)

@@ -400,7 +400,7 @@ struct Factor {
         std::vector<T> diag(s.n);
         std::vector<std::vector<T>> Z(s.ns);  // full m x m blocks of A^-1, alive while needed
         std::vector<int> pending(s.ns, 0);
-        std::vector<T> Y, Linv;
+        std::vector<T> Y, Linv, LinvD, dinv_(s.n);
         for (int J = s.ns - 1; J >= 0; --J) {
             const int m = s.m(J), nc = s.nc(J), mr = m - nc, f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
@@ -458,12 +458,16 @@ struct Factor {
                     for (int i = j + 1; i < nc; ++i) c[i] -= Pj[i] * cj;
                 }
             }
-            const T *Dj = &D[f];
+            // LinvD = D^-1 L11^-1 (rows scaled), so that Z11 needs no division inside the loop
+            LinvD.resize(size_t(nc) * nc);
+            for (int i = 0; i < nc; ++i) dinv_[i] = T(1) / D[f + i];
+            for (int b = 0; b < nc; ++b)
+                for (int i = 0; i < nc; ++i) LinvD[size_t(b) * nc + i] = Linv[size_t(b) * nc + i] * dinv_[i];
             for (int b = 0; b < nc; ++b)
                 for (int a = b; a < nc; ++a) {
                     T acc = T(0);
-                    const int lo = std::max(a, b);
-                    for (int i = lo; i < nc; ++i) acc += Linv[size_t(a) * nc + i] * Linv[size_t(b) * nc + i] / Dj[i];
+                    const T *La = &Linv[size_t(a) * nc], *Wb = &LinvD[size_t(b) * nc];
+                    for (int i = a; i < nc; ++i) acc += La[i] * Wb[i];   // Linv lower: i >= max(a, b) = a
                     const T *Za = &ZJ[size_t(a) * m + nc];
                     const T *Yb = &Y[size_t(b) * mr];
                     for (int i = 0; i < mr; ++i) acc -= Za[i] * Yb[i];
