@@ -55,9 +55,11 @@ def _clean_mesh(V, C, rel_tol: float = 1e-12):
         raise ValueError(f"tetrahedra need 3-D vertices; V has shape {V.shape}")
     s = np.sort(C, axis=1)
     repeated = np.any(s[:, 1:] == s[:, :-1], axis=1)
-    meas = element_measures(V, C)
-    top = meas.max() if meas.size else 0.0
-    bad = repeated | (meas <= rel_tol * top) | ~np.isfinite(meas)
+    with np.errstate(over="ignore", invalid="ignore"):   # overflowing measures are dropped below
+        meas = element_measures(V, C)
+    finite = np.isfinite(meas)
+    top = meas[finite].max() if finite.any() else 0.0
+    bad = repeated | (meas <= rel_tol * top) | ~finite
     if bad.all():
         raise ValueError(f"all {C.shape[0]} elements are degenerate (zero area/volume or repeated vertices)")
     return V, C[~bad], int(bad.sum()), meas[~bad]
