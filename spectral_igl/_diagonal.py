@@ -24,9 +24,9 @@ of any single solve. Methods:
     filter uses the Carathéodory--Fejér approximant, other filters an AAA fit. The
     commute-time kernel (:math:`s^{-1}`) is exact: :math:`G = QXQ^\top` with X the inverse of
     the grounded stiffness and :math:`Q = I - 1w^\top` the B-orthogonal projector off ker L;
-    with a lumped mass the biharmonic kernel (:math:`s^{-2}`) is exact too, as
-    :math:`Q(XBX - \ldots)Q^\top` with :math:`XBX = (L B^{-1} L)^{-1}` on the grounded
-    vertices. Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
+    the biharmonic kernel (:math:`s^{-2}`) is exact too, :math:`G_c B G_c`, with
+    :math:`\mathrm{diag}(XBX)` the complex-step derivative of
+    :math:`\mathrm{diag}((L_g - zB)^{-1})` at z = 0 (one complex factorization). Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
     :math:`\varepsilon = \max|\varphi - r|` on the spectrum (reported as
     ``abs_error_bound``), and the error is also measured at ``samples`` vertices.
 ``"probing"``
@@ -265,11 +265,11 @@ def _grounded_stiffness(lap):
 
 
 def _grounded_ldlt(lap):
-    """Cached (LDLᵀ of L_g, grounded mask)."""
+    """Cached (LDLᵀ of L_g, L_g, grounded mask)."""
     g = lap.cache.get("grounded_ldlt")
     if g is None:
         Lg, grounded = _grounded_stiffness(lap)
-        g = lap.cache["grounded_ldlt"] = (_ldlt(lap, Lg), grounded)
+        g = lap.cache["grounded_ldlt"] = (_ldlt(lap, Lg), Lg, grounded)
     return g
 
 
@@ -290,7 +290,7 @@ class _SelinvKernel:
         if self.power:
             self.vol = _component_volume(lap)
             self.w = np.asarray(lap.B.sum(axis=1)).ravel() / self.vol   # Q = I - 1 w^T per component
-            self.fac, self.grounded = _grounded_ldlt(lap)
+            self.fac, self.Lg, self.grounded = _grounded_ldlt(lap)
             self.eps, self.n_factorizations = 0.0, 2
         else:
             self._rational(tol)
@@ -348,8 +348,8 @@ class _SelinvKernel:
     def _commute(self, V):
         r""":math:`Q X Q^\top V` for V of shape (n, k): the kernel of :math:`s^{-1}`."""
         w = self.w[:, None]
-        Y = self._X(V - w * np.stack([self._comp_sum(v) for v in V.T], axis=1))
-        return Y - np.stack([self._comp_sum(self.w * y) for y in Y.T], axis=1)
+        Y = self._X(V - w * self._comp_sum(V))
+        return Y - self._comp_sum(w * Y)
 
     # ----------------------------------------------------------------- public
     def columns(self, E):
@@ -366,13 +366,15 @@ class _SelinvKernel:
 
         out += self.pf.alpha0.real * mass_solve(lap, E, backend="ldlt")
         if self.filt.singular:
-            out -= self._kernel_part()[:, None] * np.stack([self._comp_sum(e) for e in E.T], axis=1)
+            out -= self._kernel_part()[:, None] * self._comp_sum(E)
         return out
 
     def _comp_sum(self, e):
-        r"""(1_c 1_c^\top e) per component: the kernel projector's column without 1/V."""
+        r""":math:`\sum_c 1_c 1_c^\top e`: each entry replaced by its component's sum ((n,) or (n, k))."""
         comp = self.lap.components
-        return np.bincount(comp, weights=e, minlength=self.lap.n_components)[comp]
+        S = sp.csr_matrix((np.ones(self.lap.n), (np.arange(self.lap.n), comp)),
+                          shape=(self.lap.n, self.lap.n_components))
+        return S @ (S.T @ e)
 
     def diagonal(self):
         """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
@@ -405,9 +407,8 @@ class _SelinvKernel:
             from .approx import lambda_max
 
             h = 1e-20 * lambda_max(lap)
-            Lg, _ = _grounded_stiffness(lap)
             keep = sp.diags((~self.grounded).astype(float))
-            step = _ldlt(lap, (Lg - 1j * h * (keep @ lap.B @ keep)).tocsr())
+            step = _ldlt(lap, (self.Lg - 1j * h * (keep @ lap.B @ keep)).tocsr())
             xbx = step.inverse_diagonal().imag / h
             xbx[self.grounded] = 0.0
             mdiag = xbx - vol * u * u

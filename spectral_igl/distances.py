@@ -153,17 +153,12 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         else:
             col = lap.mass * kern.columns(e * lap.mass[:, None])[:, 0]
             bound = bound * lap.mass ** 2
-        d2 = diag[s] + diag - 2.0 * col
-        d2[s] = 0.0
-        scale = np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col)
-        thr = 2.0 * (bound + bound[s]) + 64.0 * np.finfo(float).eps * scale
+        err = 2.0 * (bound + bound[s])
     else:
         op2 = _operator(lap, G2, method, tol)
         col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
         col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
         col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
-        d2 = diag[s] + diag - 2.0 * col
-        d2[s] = 0.0
         # error of each d^2 entry: the diagonal's (bound or measured sample error), the
         # column's certified bound, and rounding of the cancellation
         if dinfo["method"] == "exact":
@@ -175,8 +170,11 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         minv = 1.0 / lap.mass
         fac = 1.0 if lap.lumped else 5.0
         cerr = col_bound * np.sqrt(fac * minv * minv[s]) if delta == "mass" else 0.0
-        scale = np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col)
-        thr = 2.0 * derr + 2.0 * cerr + 64.0 * np.finfo(float).eps * scale
+        err = 2.0 * derr + 2.0 * cerr
+    d2 = diag[s] + diag - 2.0 * col
+    d2[s] = 0.0
+    # plus the rounding of the cancellation
+    thr = err + 64.0 * np.finfo(float).eps * (np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col))
     redo = np.flatnonzero(d2 <= thr)
     redo = redo[redo != s]
     unverified = redo[:0]

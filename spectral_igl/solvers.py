@@ -44,10 +44,19 @@ def _check_backend(backend: str) -> str:
     return backend
 
 
-def _ldlt_safe(beta, theta) -> bool:
-    """True when theta B + beta L has a definite real or imaginary part (no pivoting needed)."""
+def _ldlt_safe(lap: Laplacian, beta, theta) -> bool:
+    """True when theta B + beta L has a definite real or imaginary part, so that LDLᵀ needs
+    no pivoting: a part t B + b L is definite when t != 0 and b does not have the opposite
+    sign, or when |t/b| lies above the spectrum of B⁻¹L."""
+    def definite(t, b):
+        if t == 0 or t * b >= 0:
+            return t != 0
+        from .approx._common import lambda_max
+
+        return abs(t) > abs(b) * lambda_max(lap)
+
     beta, theta = complex(beta), complex(theta)
-    return (theta.real > 0 and beta.real >= 0) or (theta.imag != 0 and theta.imag * beta.imag >= 0)
+    return definite(theta.real, beta.real) or definite(theta.imag, beta.imag)
 
 
 def ldlt_pattern(lap: Laplacian):
@@ -99,7 +108,7 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     backend = _check_backend(backend)
     cplx = isinstance(beta, complex) or isinstance(theta, complex)
     spd = (not cplx) and theta > 0 and beta >= 0
-    if cplx and backend == "auto" and _ldlt_safe(beta, theta) and _selinv.available():
+    if cplx and backend == "auto" and _selinv.available() and _ldlt_safe(lap, beta, theta):
         backend = "ldlt"
     key = ("shifted", beta, theta, backend)
     cache = lap.cache.setdefault("factors", OrderedDict())
@@ -107,16 +116,15 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     if fac is not None:
         cache.move_to_end(key)
         return fac
-    if cplx:
+    if backend == "ldlt":
+        if not _ldlt_safe(lap, beta, theta):
+            raise ValueError(f"backend 'ldlt' needs a definite real or imaginary part, got "
+                             f"beta={beta}, theta={theta}")
+        dt = np.complex128 if cplx else np.float64
+        fac = _selinv.LDLT((theta * lap.B.astype(dt) + beta * lap.L.astype(dt)).tocsr(), ldlt_pattern(lap))
+    elif cplx:
         A = (theta * lap.B.astype(np.complex128) + beta * lap.L.astype(np.complex128)).tocsr()
-        if backend == "ldlt" and _ldlt_safe(beta, theta):
-            fac = _selinv.LDLT(A, ldlt_pattern(lap))
-        else:
-            fac = factorize(A, backend="superlu", spd=False)
-    elif backend == "ldlt":
-        if not (spd or _ldlt_safe(beta, theta)):
-            raise ValueError(f"backend 'ldlt' needs a definite matrix, got beta={beta}, theta={theta}")
-        fac = _selinv.LDLT((theta * lap.B + beta * lap.L).tocsr(), ldlt_pattern(lap))
+        fac = factorize(A, backend="superlu", spd=False)
     else:
         A = (theta * lap.B + beta * lap.L).tocsr()
         if spd:

@@ -131,3 +131,19 @@ def test_selinv_one_to_all_at_10k_matches_exact_norms(t):
     targets = np.r_[rng.choice(lap.n, 6, replace=False), np.flatnonzero(lap.L[[src]].toarray()[0])[:2]]
     exact = sig.diffusion_distance(lap, t, src, targets=targets)   # norms of filtered differences
     assert np.abs(d[targets] - exact).max() <= 1e-7 * d.max()
+
+
+def test_shifted_factor_ldlt_accepts_definite_and_refuses_indefinite(lap_torus):
+    """theta B + beta L needs no pivoting when a part of it is definite, also negative
+    definite (a real pole above the spectrum); an indefinite real shift is refused."""
+    from spectral_igl.approx import lambda_max
+
+    lap = lap_torus
+    b = lambda_max(lap)
+    rhs = np.random.default_rng(2).standard_normal(lap.n)
+    for beta, theta in [(1.0, -1.5 * b), (1.0, 2.0), (0.5, -3.0 + 1.0j)]:
+        fac = sig.solvers.shifted_factor(lap, beta, theta, backend="ldlt")
+        A = (theta * lap.B + beta * lap.L).toarray()
+        assert np.abs(fac.solve(rhs) - np.linalg.solve(A, rhs)).max() <= 1e-10 * np.abs(np.linalg.solve(A, rhs)).max()
+    with pytest.raises(ValueError, match="definite"):
+        sig.solvers.shifted_factor(lap, 1.0, -0.5 * b, backend="ldlt")
