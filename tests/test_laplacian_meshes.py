@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import spectral_igl as sig
-from spectral_igl._factor import factorize
+from spectral_igl.linalg import factorize
 
 from conftest import MESH_DIR, read_shared_mesh
 

@@ -6,7 +6,9 @@ import warnings
 import numpy as np
 
 from .._validate import as_positive, as_signal
-from .harmonic import _check_lap
+from ..filters import heat
+from ..approx import SpectralOperator
+from ..laplacian import as_laplacian
 
 __all__ = ["wasserstein_distance", "sinkhorn"]
 
@@ -43,13 +45,11 @@ def sinkhorn(lap, mu0, mu1, gamma, op=None, max_iter: int = 2000, tol: float = 1
     Kernel applications go through the engine (``op``, a heat
     :class:`spectral_igl.SpectralOperator`, reused across calls when given).
     """
-    from .. import SpectralOperator, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
     if op is None:
-        op = SpectralOperator(lap, filters.heat(gamma / 4.0), method=method, tol=kernel_tol)
+        op = SpectralOperator(lap, heat(gamma / 4.0), method=method, tol=kernel_tol)
     a = lap.mass
     s0, s1 = mu0 > 0, mu1 > 0
     tiny = np.finfo(float).tiny
@@ -149,9 +149,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
     icosphere(5): -2.4%, -8.3%, -18% (there the kernel range above also binds). Use
     :math:`\gamma \ge 10 h^2`; below, the result drifts low.
     """
-    from .. import SpectralOperator, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
     if np.array_equal(mu0, mu1):
@@ -165,7 +163,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
                           "edge length): the discrete heat kernel is far from its smooth limit at "
                           "t = gamma/4 and the distance drifts low", RuntimeWarning, stacklevel=2)
     # one operator (and its cached factorizations) for all three transport problems
-    op = SpectralOperator(lap, filters.heat(gamma / 4.0), method=method, tol=kernel_tol)
+    op = SpectralOperator(lap, heat(gamma / 4.0), method=method, tol=kernel_tol)
     kw = dict(op=op, max_iter=max_iter, tol=tol)
     vals = []
     for a, b in ((mu0, mu1), (mu0, mu0), (mu1, mu1)):

@@ -5,7 +5,7 @@ import scipy.sparse as sp
 
 import spectral_igl as sig
 from data_generators import icosphere
-from spectral_igl import solvers
+from spectral_igl import linalg as solvers
 
 
 def two_spheres():
