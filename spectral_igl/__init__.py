@@ -12,20 +12,55 @@ eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``diagonal`` (kernel diagonals
 """
 from . import filters, linalg
 from ._version import __version__
-from .applications import (CriticalPoints, HeatGeodesics, critical_points, diffusion_basis,
-                           diffusion_smooth, feature_points, geodesic_distance, harmonic,
-                           optimal_time, schrodinger, smooth, smooth_constrained, varadhan_distance,
-                           wasserstein_distance)
+from .applications import (
+                           CriticalPoints,
+                           HeatGeodesics,
+                           critical_points,
+                           diffusion_basis,
+                           diffusion_smooth,
+                           feature_points,
+                           geodesic_distance,
+                           harmonic,
+                           optimal_time,
+                           schrodinger,
+                           smooth,
+                           smooth_constrained,
+                           varadhan_distance,
+                           wasserstein_distance,
+)
 from .approx import METHODS, SpectralOperator, apply_filter, spectral_operator
-from .descriptors import auto_diffusion_function, eccentricity, hks, spectral_descriptor, wks
+from .descriptors import (
+                           auto_diffusion_function,
+                           eccentricity,
+                           hks,
+                           spectral_descriptor,
+                           wks,
+)
 from .diagonal import distance_colouring, kernel_diagonal
-from .distances import (OneToAll, biharmonic_distance, commute_time_distance, diffusion_distance,
-                        mexican_hat_distance, pairwise_spectral_distance, polyharmonic_distance,
-                        spectral_distance, wave_distance)
+from .distances import (
+                           OneToAll,
+                           biharmonic_distance,
+                           commute_time_distance,
+                           diffusion_distance,
+                           mexican_hat_distance,
+                           pairwise_spectral_distance,
+                           polyharmonic_distance,
+                           spectral_distance,
+                           wave_distance,
+)
 from .embedding import spectral_embedding
 from .kernels import heat_kernel, spectral_kernel
-from .laplacian import (Laplacian, anisotropic_laplacian, graph_laplacian, lambda_max, laplacian,
-                        make_laplacian, point_cloud_laplacian, tetrahedralize, voxel_laplacian)
+from .laplacian import (
+                           Laplacian,
+                           anisotropic_laplacian,
+                           graph_laplacian,
+                           lambda_max,
+                           laplacian,
+                           make_laplacian,
+                           point_cloud_laplacian,
+                           tetrahedralize,
+                           voxel_laplacian,
+)
 from .linalg import dense_eigs, eigs, lambda_min_positive
 
 __all__ = [

@@ -18,7 +18,15 @@ import numpy as np
 from ._validate import as_delta, as_index, as_indices, as_positive
 from .approx import spectral_operator
 from .diagonal import EXACT_MAX, kernel_diagonal, low_rank, phi_values, selinv_kernel
-from .filters import biharmonic, check_filter, commute_time, heat, mexican_hat, polyharmonic, wave
+from .filters import (
+    biharmonic,
+    check_filter,
+    commute_time,
+    heat,
+    mexican_hat,
+    polyharmonic,
+    wave,
+)
 from .kernels import kernel_columns
 from .laplacian import as_laplacian
 

@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import numbers
 
-import numpy as np
-
 from .diagonal import phi_values
 from .filters import check_filter
 from .laplacian import as_laplacian

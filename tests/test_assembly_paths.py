@@ -5,7 +5,12 @@ import scipy.sparse as sp
 
 from data_generators import icosphere
 from spectral_igl.laplacian._operator import _symmetrize, _zero_row_sums
-from spectral_igl.laplacian.mesh import full_mass, star_adjacency, element_measures, mesh_components
+from spectral_igl.laplacian.mesh import (
+    element_measures,
+    full_mass,
+    mesh_components,
+    star_adjacency,
+)
 
 
 def _reference_zero_row_sums(L):

@@ -1,7 +1,6 @@
 """Shifted factorizations and pseudo-inverse solves against dense linear algebra."""
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 import spectral_igl as sig
 from data_generators import icosphere

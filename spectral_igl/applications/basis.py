@@ -6,9 +6,11 @@ import numbers
 import numpy as np
 
 from .._validate import as_indices, as_nonnegative, as_positive, as_signal, describe
-from ..filters import heat
 from ..approx import SpectralOperator
+from ..descriptors import auto_diffusion_function
+from ..filters import heat
 from ..laplacian import as_laplacian
+from ..linalg import eigs
 
 __all__ = ["diffusion_basis", "feature_points", "graph_extrema"]
 
@@ -173,8 +175,6 @@ def feature_points(lap, n_eigenfunctions: int = 6, t: float = 0.1, source: str =
         of :func:`graph_extrema`) of each eigenfunction (``"eigenfunctions"``) or the
         maxima of the auto-diffusion function (``"adf"``, tips of protrusions).
     """
-    from ..descriptors import auto_diffusion_function
-    from ..linalg import eigs
 
     lap = as_laplacian(lap)
     if source not in ("eigenfunctions", "adf"):

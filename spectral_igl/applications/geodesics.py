@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..linalg import factorize
 from .._validate import as_indices, as_positive, describe
+from ..approx import SpectralOperator
+from ..filters import heat
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
-from ..filters import heat
-from ..approx import SpectralOperator
+from ..linalg import factorize
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
 

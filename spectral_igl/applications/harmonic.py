@@ -6,9 +6,9 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from ..linalg import factorize
 from .._validate import as_indices, describe
 from ..laplacian import Laplacian, as_laplacian
+from ..linalg import factorize
 
 __all__ = ["harmonic", "constraints", "polyharmonic_matrix"]
 

@@ -6,9 +6,10 @@ import numbers
 import numpy as np
 
 from .._validate import as_signal, describe
-from ..filters import heat
 from ..approx import apply_filter
+from ..filters import heat
 from ..laplacian import as_laplacian, lambda_max
+from ..linalg import eigs
 
 __all__ = ["optimal_time"]
 
@@ -117,7 +118,6 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     the mesh, hardly separable from the noise, and the gain of any smoothing is small.
     Cost: one heat evaluation of ``1 + probes`` columns per time.
         """
-    from ..linalg import eigs
 
     lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)

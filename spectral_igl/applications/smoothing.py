@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..linalg import factorize
 from .._validate import as_indices, as_nonnegative, as_positive, as_signal
-from .harmonic import constraints, polyharmonic_matrix
-from ..filters import heat
 from ..approx import apply_filter
+from ..filters import heat
 from ..laplacian import as_laplacian
+from ..linalg import factorize
+from .harmonic import constraints, polyharmonic_matrix
 
 __all__ = ["smooth", "smooth_constrained", "diffusion_smooth"]
 

@@ -6,9 +6,10 @@ import warnings
 import numpy as np
 
 from .._validate import as_positive, as_signal
-from ..filters import heat
 from ..approx import SpectralOperator
+from ..filters import heat
 from ..laplacian import as_laplacian
+from .geodesics import mean_edge_length
 
 __all__ = ["wasserstein_distance", "sinkhorn"]
 
@@ -155,7 +156,6 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
     if np.array_equal(mu0, mu1):
         return 0.0
     if lap.domain in ("triangle", "tet") and "V" in lap.data:
-        from .geodesics import mean_edge_length
 
         h = mean_edge_length(lap.data["V"], lap.data["F" if lap.domain == "triangle" else "T"])
         if gamma < 10.0 * h * h:

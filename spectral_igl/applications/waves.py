@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 from .._validate import as_signal, describe
-from ..filters import wave
 from ..approx import apply_filter
+from ..filters import wave
 from ..laplacian import as_laplacian
 
 __all__ = ["schrodinger"]

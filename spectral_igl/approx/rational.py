@@ -243,8 +243,9 @@ def aaa_fit(fn, a: float, b: float, rtol: float = 1e-13, max_terms: int = 100, i
     [a, b]); residues and the constant are refitted by least squares with the poles fixed
     (conjugate-symmetric for a real function).
     """
-    from scipy.interpolate import AAA
     import warnings
+
+    from scipy.interpolate import AAA
 
     lo = a if a > 0 else b * 1e-12
     x = np.unique(np.concatenate([np.linspace(a, b, 1000), np.geomspace(lo, b, 1500), [a, b]]))

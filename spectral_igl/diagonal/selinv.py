@@ -6,7 +6,14 @@ import scipy.sparse as sp
 
 from ..approx.rational import RationalPlan, aaa_fit, certify, rounding
 from ..laplacian import lambda_max
-from ..linalg import grounded_factor, ldlt, ldlt_factor, lambda_min_positive, mass_solve, shifted_factor
+from ..linalg import (
+    grounded_factor,
+    lambda_min_positive,
+    ldlt,
+    ldlt_factor,
+    mass_solve,
+    shifted_factor,
+)
 
 __all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]
 

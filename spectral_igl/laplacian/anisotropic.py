@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from .._validate import as_cells, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import MASSES, clean_mesh, mass_matrix, star_adjacency
+from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
 
@@ -173,7 +173,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     alpha = as_nonnegative(alpha, "alpha")
     if mass not in MASSES:
         raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
-    V, F, dropped, meas = clean_mesh(V, F)
+    V, F, dropped, meas = clean_mesh_with_measures(V, F)
     if F.shape[1] != 3:
         raise ValueError(f"anisotropic_laplacian needs triangles, got F of shape {F.shape}")
     if V.shape[1] != 3:

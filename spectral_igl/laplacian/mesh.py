@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from .._validate import as_cells, as_points
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "element_measures", "mesh_components", "cotan_stiffness"]
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass", "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness"]
 
 _WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform")
 MASSES = ("full", "lumped", "voronoi", "barycentric")
@@ -42,11 +42,11 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
     infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
-    V, C, dropped, _ = clean_mesh(V, C, rel_tol)
+    V, C, dropped, _ = clean_mesh_with_measures(V, C, rel_tol)
     return V, C, dropped
 
 
-def clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
@@ -185,7 +185,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
     if mass not in MASSES:
         raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
-    V, C, dropped, meas = clean_mesh(V, F)
+    V, C, dropped, meas = clean_mesh_with_measures(V, F)
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",

@@ -12,8 +12,17 @@ r"""The engine's sparse linear algebra: factorizations, grounded pseudo-solves, 
 from .eigen import cached_eigs, dense_eigs, eigs, lambda_min_positive
 from .factor import BACKENDS, Factor, available_backends, factorize
 from .ldlt import LDLT, Pattern
-from .solves import (check_backend, clear_cache, grounded_factor, grounded_vertices, ldlt_factor,
-                     ldlt_pattern, mass_solve, pseudo_solve, shifted_factor)
+from .solves import (
+                     check_backend,
+                     clear_cache,
+                     grounded_factor,
+                     grounded_vertices,
+                     ldlt_factor,
+                     ldlt_pattern,
+                     mass_solve,
+                     pseudo_solve,
+                     shifted_factor,
+)
 
 __all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
            "shifted_factor", "mass_solve", "pseudo_solve", "grounded_vertices", "grounded_factor",

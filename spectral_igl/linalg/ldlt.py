@@ -20,7 +20,9 @@ __all__ = ["Pattern", "LDLT", "available", "nested_dissection"]
 
 
 def _ext():
-    from . import _ldlt as ext   # the compiled half of this module, built with the package
+    from . import (
+        _ldlt as ext,  # the compiled half of this module, built with the package
+    )
 
     return ext
 
