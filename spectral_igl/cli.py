@@ -344,7 +344,7 @@ def _job_kernel_distance(args):
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
            title=f"{ev.label} ({name})")
     prog.step("written")
-    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g}"
+    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g} ({ev.bound_kind})"
     _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
                f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; error bound {bound}; "
                f"{ev.seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
