@@ -114,10 +114,11 @@ def _input_args(p, outputs=_OUTPUTS):
     p.add_argument("--level", type=int, default=3,
                    help="resolution of the generated shape, 1 to 7 (sphere: icosphere "
                         "subdivisions, 642 vertices at 3; default 3)")
-    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"),
-                   help="Laplacian weights (default cotan: linear FEM)")
-    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"),
-                   help="mass matrix (default full: linear FEM)")
+    p.add_argument("--weights", default="auto", choices=("auto", "cotan", "intrinsic_delaunay", "uniform"),
+                   help="Laplacian weights (default auto: intrinsic Delaunay for triangles, cotan "
+                        "for tets)")
+    p.add_argument("--mass", default="lumped", choices=("lumped", "full", "barycentric"),
+                   help="mass matrix (default lumped: with auto weights the heat stays non-negative)")
     p.add_argument("-o", "--out", action="append", default=[], metavar="FILE",
                    help=f"write the result; type by extension ({', '.join(outputs)}); repeatable")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")

@@ -316,6 +316,10 @@ class SpectralOperator(spla.LinearOperator):
             if kernel_part is not None:    # rounding of the exact kernel part
                 bound = bound + 8 * EPS * bnorm(lap, kernel_part)
             bound = np.asarray(bound, dtype=float)
+            if not np.all(np.isfinite(bound)):
+                raise ValueError(f"method {self.method!r} cannot bound its error for {self.filter!r} on "
+                                 f"[{self.a:.3g}, {self.lambda_max:.3g}]; use method='rational' or "
+                                 "'krylov', or a smaller t")
             self.error_bound = float(bound) if f.ndim == 1 else np.broadcast_to(bound, f.shape[1:]).copy()
         if not self.filter.is_complex and np.isrealobj(f) and np.iscomplexobj(u):
             u = u.real

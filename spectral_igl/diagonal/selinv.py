@@ -21,8 +21,8 @@ from ..linalg import (
 )
 
 #: nodes of the circle rule for the integer powers s^-p, p >= 3, and the radius as a
-#: fraction of lambda_min_positive: aliasing error (1/3)^20 = 2.9e-10 relative
-CIRCLE_NODES = 20
+#: fraction of lambda_min_positive: aliasing error (1/3)^24 = 3.5e-12 relative
+CIRCLE_NODES = 24
 CIRCLE_RADIUS = 1.0 / 3.0
 
 __all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]

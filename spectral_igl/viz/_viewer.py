@@ -58,7 +58,7 @@ class Viewer:
 
     def __init__(self, shape, quantity="distance", filter="biharmonic", t=None, method="auto",
                  source=0, n_levels=12, tol=1e-8, off_screen=None, window_size=(900, 800),
-                 weights="cotan", diagonal="auto"):
+                 weights="auto", diagonal="auto"):
         pv = pyvista()
         lines_over_surfaces()
 
