@@ -62,10 +62,11 @@ def test_stalled_iterations_stop_and_small_gamma_warns(sphere):
     mu0, mu1 = np.zeros(lap.n), np.zeros(lap.n)
     mu0[0] = 1.0
     mu1[int(np.argmin(np.abs(np.arccos(np.clip(V @ V[0], -1, 1)) - 0.5)))] = 1.0
-    # a coarse kernel cannot give a marginal error of 1e-9: the loop stops when the error
-    # stalls (it used to run all 2000 iterations), with the value of an accurate kernel
+    # a coarse kernel (tol 1e-4) cannot give a marginal error of 1e-9: the loop stops when
+    # the error stalls (it used to run all 2000 iterations), with the value of an accurate
+    # kernel (since the kernel of L is split off exactly, tol 1e-8 and 1e-5 converge)
     v_ref, i_ref = sinkhorn(lap, mu0, mu1, 0.1, kernel_tol=1e-12)
-    v, info = sinkhorn(lap, mu0, mu1, 0.1, kernel_tol=1e-8)
+    v, info = sinkhorn(lap, mu0, mu1, 0.1, kernel_tol=1e-4)
     assert i_ref["converged"] and not info["converged"]
     assert info["iterations"] < 100 and abs(v - v_ref) < 1e-6 * abs(v_ref)
     h = mean_edge_length(V, lap.data["F"])
