@@ -182,8 +182,9 @@ def laplacian(V, F, weights: str = "auto", mass: str = "lumped") -> Laplacian:
     kernel, diffusion distances and HKS are non-negative). On the unit sphere the heat
     kernel at t = 0.05 converges in the max norm at rate 2.0 with these defaults against
     1.6 with ``mass="full"`` (errors 5.1e-3 and 4.3e-3 at 10242 vertices), and the first 25
-    eigenvalues are closer (0.13 against 0.16 at 2562 vertices); the full mass gives heat
-    kernels with negative values of -5% to -13% of the peak at small t. Cotan weights of
+    eigenvalues are closer (0.13 against 0.16 at 2562 vertices); cotan with the full mass
+    gives heat kernels whose minimum is -0.1% to -3% of the peak on real meshes at t = 1e-3
+    (unit area), -5% to -13% on icospheres at t = 1e-4 (``benchmarks/positivity.py``). Cotan weights of
     tetrahedra can be positive off the diagonal (obtuse dihedral angles), so positivity is
     not guaranteed there. ``lap.data["positivity"]`` says whether this Laplacian has it
     (L's off-diagonal entries all <= 0 and B diagonal).
