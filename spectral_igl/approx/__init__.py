@@ -6,9 +6,11 @@ The kernel of L (the constants of each connected component) is split off exactly
 .. math:: \varphi(\tilde L)f = \varphi(0)\,P_0 f + \varphi(\tilde L)(f - P_0 f),
 
 and every spectrum-free method replaces φ by a scalar approximation r on
-:math:`[a, \lambda_{\max}]` with a = :func:`~spectral_igl.linalg.lambda_min_positive` (a
-certified lower bound of the smallest positive eigenvalue) and the remainder is projected
-back onto the complement of ker L. So the heat at any large t tends to the projection onto
+:math:`[a, \lambda_{\max}]` and the remainder is projected back onto the complement of
+ker L. a = :func:`~spectral_igl.linalg.lambda_min_positive` (a certified lower bound of the
+smallest positive eigenvalue) for the singular filters, and for the heat and Mexican-hat
+filters once :math:`t\lambda_{\max}` exceeds :data:`LARGE_T`; a = 0 otherwise (the
+remainder has no component in ker L, so [0, λ_max] encloses its spectrum too). So the heat at any large t tends to the projection onto
 the constants of each component, and the approximation never has to resolve φ near 0. When
 :math:`\max_{[a, \lambda_{\max}]}|\varphi| \le` ``tol``/2 (heat at large t), the remainder is
 dropped and that maximum is the bound. Since :math:`\tilde L` is self-adjoint in the B-inner
@@ -86,6 +88,10 @@ _PLANS = {
 METHODS = ("auto",) + tuple(_PLANS)
 #: Methods that approximate the heat filter only.
 HEAT_ONLY = ("euler", "taylor1", "power", "contour")
+#: above this t * lambda_max, decaying filters (heat, Mexican hat) are approximated on
+#: [lambda_min_positive, lambda_max] (one more factorization, cached), and dropped where
+#: they are below tol/2 there; below it, on [0, lambda_max]
+LARGE_T = 1e6
 
 
 def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
@@ -199,7 +205,9 @@ class SpectralOperator(spla.LinearOperator):
         self.lap, self.filter, self.method, self.tol = lap, filt, method, tol
         self.lambda_max = lambda_max(lap)
         self.split = method not in ("dense", "eigen")
-        self.a = lambda_min_positive(lap) if (filt.singular or self.split) else 0.0
+        t = filt.params.get("t") if filt.kind in ("heat", "mexican_hat") else None
+        decays = self.split and t is not None and t * self.lambda_max > LARGE_T
+        self.a = lambda_min_positive(lap) if (filt.singular or decays) else 0.0
         if self.a >= self.lambda_max:          # only isolated vertices, or a 1-edge mesh
             self.a = 0.5 * self.lambda_max
         kwargs = dict(options)
@@ -220,8 +228,7 @@ class SpectralOperator(spla.LinearOperator):
                              f"[{self.a:.3g}, {self.lambda_max:.3g}] (t * lambda_max too large for it); "
                              "use method='rational', 'krylov' or 'chebyshev', or a smaller t")
         self._enclosure = {"lambda_max": lambda_max_kind(lap),
-                           "lambda_min_positive": (lambda_min_positive_kind(lap) if (filt.singular or self.split)
-                                                   else "unused")}
+                           "lambda_min_positive": (lambda_min_positive_kind(lap) if self.a > 0 else "unused")}
         self.n_solves = getattr(self.plan, "n_solves", None)
         self.error_bound = None
         pf = getattr(self.plan, "pf", None)
@@ -313,8 +320,8 @@ class SpectralOperator(spla.LinearOperator):
             else:
                 norm = inv_bnorm_upper(lap, f)
             bound = scal * norm + getattr(self.plan, "residual_bound", 0.0)
-            if kernel_part is not None:    # rounding of the exact kernel part
-                bound = bound + 8 * EPS * bnorm(lap, kernel_part)
+            if kernel_part is not None:    # rounding of the exact kernel part (sums of n terms)
+                bound = bound + (8.0 + 2.0 * np.sqrt(lap.n)) * EPS * bnorm(lap, kernel_part)
             bound = np.asarray(bound, dtype=float)
             if not np.all(np.isfinite(bound)):
                 raise ValueError(f"method {self.method!r} cannot bound its error for {self.filter!r} on "
