@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-__all__ = ["FILTERS", "QUANTITIES", "make_filter", "evaluate", "Evaluation"]
+__all__ = ["FILTERS", "QUANTITIES", "FILTERED", "make_filter", "evaluate", "Evaluation", "uses_time"]
 
 #: filter name -> whether it takes a time/scale parameter t
 FILTERS = {
@@ -20,7 +20,14 @@ FILTERS = {
     "biharmonic": False,
     "polyharmonic": False,
 }
-QUANTITIES = ("kernel", "distance")
+QUANTITIES = ("kernel", "distance", "geodesic")
+#: quantities whose value depends on the spectral filter (the geodesic distance does not)
+FILTERED = ("kernel", "distance")
+
+
+def uses_time(quantity: str, filter: str) -> bool:
+    """Whether the picture of ``quantity`` with ``filter`` depends on a time/scale t."""
+    return quantity in FILTERED and FILTERS.get(filter, False)
 
 
 def make_filter(name: str, t: float | None = None, order: int = 3):
@@ -83,9 +90,11 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     Parameters
     ----------
     lap : Laplacian
-    quantity : {"kernel", "distance"}
+    quantity : {"kernel", "distance", "geodesic"}
         ``"kernel"``: :math:`K(\cdot, i) = \varphi(\tilde L) B^{-1} e_i`;
-        ``"distance"``: :math:`d(i, \cdot)`, the spectral distance of :math:`\varphi`.
+        ``"distance"``: :math:`d(i, \cdot)`, the spectral distance of :math:`\varphi`;
+        ``"geodesic"``: the geodesic distance by the heat method (``filter`` and ``t`` are
+        not used).
     source : int
         Vertex ``i``.
     filter : str
@@ -111,6 +120,12 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     source = as_index(source, lap.n, "source")
+    if quantity == "geodesic":
+        from ..applications.geodesics import geodesic_distance
+
+        start = time.perf_counter()
+        values = np.asarray(geodesic_distance(lap, source), dtype=float).ravel()
+        return Evaluation(values, None, time.perf_counter() - start, "geodesic distance (heat method)")
     filt = make_filter(filter, t, order)
     label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter] else "")
     start = time.perf_counter()
