@@ -114,6 +114,27 @@ def _input_args(p, outputs=_OUTPUTS):
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal")
+    _picture_args(p)
+
+
+def _view(text):
+    from .viz._camera import parse_view
+
+    try:
+        parse_view(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
+
+
+def _picture_args(p):
+    p.add_argument("--view", default="auto", type=_view, metavar="VIEW",
+                   help="camera of pictures: auto (face the source from outside the shape), "
+                        "iso, +x, -x, +y, -y, +z, -z, or a direction dx,dy,dz (default auto)")
+    p.add_argument("--cmap", default=None, metavar="NAME",
+                   help="colour map of pictures (a matplotlib name); default by meaning: "
+                        "sequential for distances and non-negative values, diverging centred "
+                        "at 0 for signed ones")
 
 
 def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area)"):
@@ -214,7 +235,7 @@ def build_parser():
                                    "kernel/distance. With --screenshot it renders once off screen.")
     _input_args(p, outputs=())
     _engine_args(p, "biharmonic")
-    p.add_argument("--quantity", default="distance", choices=("distance", "kernel"))
+    p.add_argument("--quantity", default="distance", choices=("distance", "kernel", "geodesic"))
     p.add_argument("--screenshot", metavar="PNG", help="render off screen to this file and exit")
 
     p = sub.add_parser("figures", help="run the example scripts that draw the survey's figures",
@@ -293,7 +314,7 @@ def _volume_scale(lap):
     return float(np.sum((V.max(0) - V.min(0)) ** 2))
 
 
-def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
+def _write(outs, values, V, C, args, sources=None, kind="auto", title=""):
     for out in outs:
         path = Path(out)
         if path.parent and not path.parent.exists():
@@ -308,7 +329,8 @@ def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
             from .viz import plot_levelsets
 
             f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
-            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
+            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path,
+                           camera=getattr(args, "view", "auto"), cmap=getattr(args, "cmap", None))
         else:
             from .io import write_mesh
 
@@ -339,7 +361,7 @@ def _job_kernel_distance(args):
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
     prog.step("evaluated")
-    kind = "distance" if args.job == "distance" else "cyclic"
+    kind = "distance" if args.job == "distance" else "auto"
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
            title=f"{ev.label} ({name})")
     prog.step("written")
@@ -368,7 +390,7 @@ def _job_hks(args):
         prog.step(f"t={t:.3g}")
     H = np.column_stack(cols)
     seconds = time.perf_counter() - start
-    _write(args.out, H, V, C, args, kind="cyclic", title=f"HKS t={times[len(times) // 2]:.3g} ({name})")
+    _write(args.out, H, V, C, args, kind="sequential", title=f"HKS t={times[len(times) // 2]:.3g} ({name})")
     _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
@@ -435,7 +457,7 @@ def _job_smooth(args):
             _write([o], np.linalg.norm(g - V, axis=1), g, C, args, kind="distance",
                    title=f"smoothed, t={t:.3g} (colour: displacement)")
     else:
-        _write(args.out, g, V, C, args, kind="cyclic", title=f"smoothed, t={t:.3g}")
+        _write(args.out, g, V, C, args, kind="auto", title=f"smoothed, t={t:.3g}")
     _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
@@ -463,8 +485,11 @@ def _job_geodesic(args):
 
 def _job_view(args):
     from .viz import Viewer
-    from .viz._quantity import FILTERS
+    from .viz._backend import display_available
 
+    if args.screenshot is None and not display_available():  # before any work
+        raise CLIError("no display available for the interactive viewer: use "
+                       "--screenshot FILE.png to render off screen", EXIT_USAGE)
     V, C, name = _load_shape(args)
     if args.source >= len(V):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
@@ -474,18 +499,13 @@ def _job_view(args):
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
                     source=args.source, tol=args.tol, off_screen=True if off else None,
-                    diagonal=args.diagonal)
+                    diagonal=args.diagonal, camera=args.view, cmap=args.cmap)
     if off:
         Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
         return EXIT_OK
-    from .viz._backend import headless
-
-    if headless():
-        raise CLIError("no display available: use --screenshot FILE.png to render off screen",
-                       EXIT_USAGE)
     viewer.show()
     return EXIT_OK
 

@@ -200,7 +200,8 @@ def auto_view(surface, target, *, neighbours=None):
     direction from the centre, the normal tilted by 25 and 50 degrees, the six axis
     directions and the eight diagonals. Each candidate is scored by the fraction of the
     target's neighbourhood that a ray test shows unobstructed from the camera that
-    ``reset_camera`` would place along it; the first candidate with the best score wins.
+    ``reset_camera`` would place along it (the target itself weighing half); the first
+    candidate with the best score wins.
 
     Parameters
     ----------
@@ -217,7 +218,8 @@ def auto_view(surface, target, *, neighbours=None):
     direction : (3,) float
         Unit vector from the focal point towards the camera.
     visible : float
-        Fraction of the target and its neighbours visible from there.
+        Visibility score: 1/2 if the target is unobstructed, plus 1/2 times the fraction of
+        its neighbours that are (1.0: everything seen).
     """
     if not surface.is_all_triangles:
         surface = surface.triangulate()
@@ -229,13 +231,20 @@ def auto_view(surface, target, *, neighbours=None):
     radius = diag / 2.0
     if len(F) == 0:
         return _unit(target - focal) if np.linalg.norm(target - focal) > 0 else _unit(VIEWS["iso"]), 1.0
-    if neighbours is None:
+    n = _outward_normal(P, F, target, 0.05 * diag)
+    if neighbours is None:  # nearby vertices on the same side (not the back of a thin part)
         dist = np.linalg.norm(P - target, axis=1)
-        close = np.argsort(dist)[:13]
+        close = np.argsort(dist)[:25]
         close = close[dist[close] <= 0.03 * diag]
+        if close.size and np.linalg.norm(n) > 0:
+            N = np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])
+            vn = np.zeros_like(P)
+            for c in range(3):
+                np.add.at(vn, F[:, c], N)
+            sign = 1.0 if np.einsum("ij,ij->", P[F[:, 0]], np.cross(P[F[:, 1]], P[F[:, 2]])) >= 0 else -1.0
+            close = close[sign * (vn[close] @ n) > 0][:12]
         neighbours = P[close]
     targets = np.vstack([target[None, :], np.asarray(neighbours, dtype=float).reshape(-1, 3)])
-    n = _outward_normal(P, F, target, 0.05 * diag)
     out = target - focal
     cands = []
     if np.linalg.norm(n) > 0:
@@ -253,7 +262,10 @@ def auto_view(surface, target, *, neighbours=None):
     eps = 1e-3 * diag
     best, best_score = cands[0], -1.0
     for d in cands:
-        s = visible_fraction(occ, targets, focal, radius, d, eps)
+        # the target itself counts as much as all its neighbours together
+        s = 0.5 * visible_fraction(occ, targets[:1], focal, radius, d, eps)
+        s += 0.5 * (visible_fraction(occ, targets[1:], focal, radius, d, eps) if len(targets) > 1
+                    else 2.0 * s)
         # the point must also face the camera, not be seen edge-on through the rim
         if n is not None and np.linalg.norm(n) > 0 and d @ n < 0.05:
             s *= 0.5

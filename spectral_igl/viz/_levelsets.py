@@ -133,8 +133,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         (of all ``f`` when ``shared_scale``).
     shared_scale : bool
         With several shapes, use one colour scale and one set of iso-values for all.
-    sources : int or sequence of int, optional
-        Source vertices, marked by dots. Connected components containing no source (and
+    sources : int, sequence of int, or a list of them (one per shape), optional
+        Source vertices, marked by dots (with several shapes: the same indices in every
+        panel, or one entry per panel, ``None`` for none). Connected components containing no source (and
         vertices in no cell, and non-finite values) are drawn in a neutral grey and kept
         out of the colour range.
     critical : dict or object, optional
@@ -214,8 +215,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         raise ValueError("pass plotter only with a single shape")
     neutral = neutral_color or NEUTRAL_COLOR
 
+    per_sources = _sources_per_panel(sources, len(shapes))
     meshes, values, reached = [], [], []
-    for s, fi in zip(shapes, fs):
+    for s, fi, sources in zip(shapes, fs, per_sources):
         mesh, mkind = to_pyvista(s)
         fi = np.asarray(fi)
         if np.iscomplexobj(fi):
@@ -275,6 +277,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     views = []
 
     for j, ((mesh, mkind), fi, ok, rng) in enumerate(zip(meshes, values, reached, ranges)):
+        sources = per_sources[j]
         if ncol > 1:
             plotter.subplot(0, j)
         lo, hi = rng
@@ -366,6 +369,14 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         plotter.close()
         save_png(image, filename)
     return plotter
+
+
+def _sources_per_panel(sources, count):
+    """One source list (or None) per panel."""
+    if isinstance(sources, (list, tuple)) and count > 1 and len(sources) == count and \
+            any(s is None or np.ndim(s) > 0 for s in sources):
+        return [None if s is None else np.atleast_1d(np.asarray(s, dtype=np.int64)) for s in sources]
+    return [sources] * count
 
 
 def _set_attribute(pv, obj, name, value):

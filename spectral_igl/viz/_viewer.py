@@ -173,12 +173,16 @@ class Viewer:
         self.picks += 1
         return self.on_pick_point(picker.GetPickPosition())
 
-    def _on_press(self, obj, event):
-        self._press = tuple(obj.GetEventPosition())
+    def _event_position(self):
+        # the observers sit on the interactor style; the position is the interactor's
+        return tuple(self.plotter.iren.interactor.GetEventPosition())
 
-    def _on_release(self, obj, event):
+    def _on_press(self, obj=None, event=None):
+        self._press = self._event_position()
+
+    def _on_release(self, obj=None, event=None):
         press, self._press = self._press, None
-        pos = tuple(obj.GetEventPosition())
+        pos = self._event_position()
         if press is not None and max(abs(pos[0] - press[0]), abs(pos[1] - press[1])) <= CLICK_PIXELS:
             self.pick_at(*pos)
 
