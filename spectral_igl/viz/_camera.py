@@ -207,8 +207,9 @@ def auto_view(surface, target, *, neighbours=None):
     ----------
     surface : pyvista.PolyData
         The triangles drawn (the boundary of a volume).
-    target : (3,) float
-        The point to show (the source, or the minimum of the quantity drawn).
+    target : (3,) float or (k, 3) float
+        The point to show (the source, or the minimum of the quantity drawn); with several
+        points, the candidate view that sees most of them (facing them best) wins.
     neighbours : (k, 3) float, optional
         Points around the target that should be visible too; default the surface vertices
         within 3% of the diagonal (at most 12 of them).
@@ -225,6 +226,9 @@ def auto_view(surface, target, *, neighbours=None):
         surface = surface.triangulate()
     P, F = _surface_arrays(surface)
     target = np.asarray(target, dtype=float)
+    if target.ndim == 2 and len(target) > 1:  # several features: all of them in view
+        return _auto_view_many(surface, P, F, target)
+    target = target.reshape(3)
     lo, hi = P.min(0), P.max(0)
     focal = (lo + hi) / 2.0
     diag = float(np.linalg.norm(hi - lo)) or 1.0
@@ -276,6 +280,36 @@ def auto_view(surface, target, *, neighbours=None):
     return best, best_score
 
 
+def _auto_view_many(surface, P, F, targets):
+    """The candidate view that sees most of ``targets`` (k, 3), starting from their mean normal."""
+    lo, hi = P.min(0), P.max(0)
+    focal = (lo + hi) / 2.0
+    diag = float(np.linalg.norm(hi - lo)) or 1.0
+    normals = [_outward_normal(P, F, q, 0.05 * diag) for q in targets]
+    n = _unit(np.sum(normals, axis=0))
+    cands = ([n] if np.linalg.norm(n) > 0 else []) + [_unit(q - focal) for q in targets]
+    if np.linalg.norm(n) > 0:
+        cands += _rotations(n, np.radians([25.0, 50.0, 75.0]))
+    span = targets.max(axis=0) - targets.min(axis=0)
+    if np.linalg.norm(span) > 0:  # side views of the line between the features
+        axis = _unit(targets[-1] - targets[0])
+        cands += _rotations(axis, [np.pi / 2.0])
+    cands += [_unit(VIEWS[k]) for k in ("+x", "-x", "+y", "-y", "+z", "-z")]
+    cands += [_unit(np.array([sx, sy, sz], dtype=float)) for sx in (1, -1) for sy in (1, -1)
+              for sz in (1, -1)]
+    occ = _Occluder(surface)
+    best, best_score = cands[0], -1.0
+    for d in cands:
+        s = visible_fraction(occ, targets, focal, diag / 2.0, d, 1e-3 * diag)
+        # a point seen edge-on hardly shows: prefer views that face every target; the worst
+        # facing counts, so that two opposite features are seen from the side (with the
+        # transition between them) rather than one of them alone
+        s += 0.6 * float(min(d @ m for m in normals))
+        if s > best_score + 1e-9:
+            best, best_score = d, s
+    return best, float(np.clip(best_score, 0.0, 1.0))
+
+
 def place_camera(plotter, surface, camera="auto", target=None):
     """Point ``plotter``'s camera at ``surface``.
 
@@ -309,7 +343,7 @@ def place_camera(plotter, surface, camera="auto", target=None):
     elif target is None:
         d = _unit(VIEWS["iso"])
     elif not _has_faces(surface):
-        out = np.asarray(target, dtype=float) - focal
+        out = np.mean(np.atleast_2d(np.asarray(target, dtype=float)), axis=0) - focal
         d = _unit(out) if np.linalg.norm(out) > 0 else _unit(VIEWS["iso"])
         d = _unit(d + 0.3 * _unit(VIEWS["iso"]))
     else:

@@ -142,7 +142,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         Critical points ``{"minimum": idx, "maximum": idx, "saddle": idx}`` (or an object
         with attributes ``minima``, ``maxima``, ``saddles``), marked blue, red and green.
     volume : {"clip", "slices", "boundary", "isosurfaces"}
-        How a tetrahedral mesh is shown: boundary cut away by a plane, boundary plus three
+        How a tetrahedral mesh is shown: boundary with the quarter ``x > x_s, y > y_s`` cut
+        away (``s`` the first source, else the centre), boundary plus three
         orthogonal slices, boundary only, or iso-surfaces inside a translucent boundary.
         Iso-values of volumes are sampled in the range on the boundary (as in the survey).
     title : str, optional
@@ -159,10 +160,11 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         Pixels; default 600 x 600 per panel.
     camera : str, (3,) float or pyvista camera position
         ``"auto"`` (default): face the first source -- or, without sources, the minimum of
-        ``f`` -- from outside the shape, along the outward normal there when a ray test
+        ``f`` (both its minimum and maximum when ``f`` is signed) -- from outside the shape, along the outward normal there when a ray test
         shows it unobstructed (else the best of a few other directions), with the up
         direction from the principal axes of the shape (:func:`spectral_igl.viz.auto_view`).
-        A tetrahedral mesh cut with ``volume="clip"`` is seen from ``"iso"``, facing the cut.
+        A tetrahedral mesh cut with ``volume="clip"`` is seen from ``"iso"``, facing the cut
+        (which passes through the first source).
         Or a named view ``"iso"``, ``"+x"``, ``"-z"``, ...; a direction ``(dx, dy, dz)``
         from the shape towards the camera; a pyvista camera position.
     camera_position : optional
@@ -292,7 +294,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                   width=0.6, position_x=0.2, position_y=0.03, label_font_size=12)
         show_bar = bool(scalar_bar and (j == ncol - 1 or not (shared_scale or clim is not None)))
         common = dict(scalars="f", cmap=cmaps[j], clim=(lo, hi), show_scalar_bar=show_bar,
-                      scalar_bar_args=sb, nan_color=neutral)
+                      scalar_bar_args=sb, nan_color=neutral, ambient=0.25, diffuse=0.8)
         main, rest = split_reached(pv, mesh, mkind, ok)
         if rest is not None:  # the parts out of reach: grey, no scale, no lines
             if mkind == "points":
@@ -308,10 +310,11 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
             panel = plotter.window_size[0] / ncol  # pixels across this panel
             ps = point_size or max(3.0, 0.5 * panel / np.sqrt(max(main.n_points, 1)))
             plotter.add_mesh(main, render_points_as_spheres=True, point_size=ps, **common)
-        else:
-            _add_volume(plotter, pv, main, iso, volume, common, line_width)
         P = np.asarray(mesh.points)
         src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
+        if mkind == "tet":  # the cut of "clip" passes through the source, which it shows
+            _add_volume(plotter, pv, main, iso, volume, common, line_width,
+                        cut_at=P[src[0]] if src.size else None)
         for crit_kind, idx in _critical_sets(critical).items():
             if idx.size:
                 if idx.min() < 0 or idx.max() >= mesh.n_points:
@@ -336,6 +339,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                 camera_j = camera
                 if src.size:
                     target = P[src[0]]
+                elif ok.any() and per_panel[j] == "diverging" and mkind != "tet":
+                    cand = np.flatnonzero(ok)  # a signed function: both ends of the scale
+                    target = P[[cand[np.argmin(fi[cand])], cand[np.argmax(fi[cand])]]]
                 elif ok.any():
                     cand = np.flatnonzero(ok)
                     if mkind == "tet":
@@ -349,10 +355,14 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                     target = Q[np.argmin(np.linalg.norm(Q - target, axis=1))]
         else:
             camera_j = camera
+        same = j > 0 and mode == "auto" and views and views[0].get("direction") is not None and \
+            _same_points(meshes[0][0], mesh)
+        if same:  # the same shape in every panel: one view, so that panels compare at a glance
+            camera_j = views[0]["direction"]
         view = place_camera(plotter, drawn if mkind != "points" else mesh, camera_j, target)
         view.update(kind=per_panel[j], clim=(lo, hi))
         views.append(view)
-        if zoom is None and mkind != "tet":  # fill the panel, leaving room for title and bar
+        if zoom is None:  # fill the panel, leaving room for title and bar
             fit_view(plotter, view.pop("points", P), height=0.74 if caption else 0.82,
                      width=0.92, lift=0.035 if (caption and show_bar) else 0.0)
         else:
@@ -369,6 +379,11 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         plotter.close()
         save_png(image, filename)
     return plotter
+
+
+def _same_points(a, b):
+    """Whether two datasets have the same vertex positions."""
+    return a.n_points == b.n_points and np.array_equal(np.asarray(a.points), np.asarray(b.points))
 
 
 def _sources_per_panel(sources, count):
@@ -465,9 +480,9 @@ def _add_isolines(plotter, surface, iso, line_width):
         plotter.add_mesh(lines, color="black", line_width=line_width, show_scalar_bar=False)
 
 
-def _add_volume(plotter, pv, grid, iso, volume, common, line_width):
+def _add_volume(plotter, pv, grid, iso, volume, common, line_width, cut_at=None):
     surf = boundary_surface(grid)
-    center = np.asarray(grid.center)
+    center = np.asarray(grid.center) if cut_at is None else np.asarray(cut_at, dtype=float)
     if volume == "boundary":
         plotter.add_mesh(surf, smooth_shading=True, **common)
         _add_isolines(plotter, surf, iso, line_width)
