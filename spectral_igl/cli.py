@@ -361,7 +361,9 @@ def _job_kernel_distance(args):
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
     prog.step("evaluated")
-    kind = "distance" if args.job == "distance" else "auto"
+    from .viz._quantity import color_meaning
+
+    kind = color_meaning(args.job, args.filter)
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
            title=f"{ev.label} ({name})")
     prog.step("written")

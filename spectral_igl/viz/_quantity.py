@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-__all__ = ["FILTERS", "QUANTITIES", "FILTERED", "make_filter", "evaluate", "Evaluation", "uses_time"]
+__all__ = ["FILTERS", "QUANTITIES", "FILTERED", "make_filter", "evaluate", "Evaluation", "uses_time", "color_meaning"]
 
 #: filter name -> whether it takes a time/scale parameter t
 FILTERS = {
@@ -23,6 +23,22 @@ FILTERS = {
 QUANTITIES = ("kernel", "distance", "geodesic")
 #: quantities whose value depends on the spectral filter (the geodesic distance does not)
 FILTERED = ("kernel", "distance")
+
+
+#: filters whose kernels are non-negative quantities (their rare small negative values are
+#: discretisation artefacts, drawn at the low end of a sequential scale)
+POSITIVE_KERNELS = ("heat", "diffusion")
+
+
+def color_meaning(quantity: str, filter: str) -> str:
+    """The colour reading of a picture: ``"sequential"`` or ``"auto"`` (diverging if signed).
+
+    Distances and heat kernels are non-negative quantities; the other kernels (biharmonic,
+    commute time, wave, Mexican hat) take both signs.
+    """
+    if quantity != "kernel" or filter in POSITIVE_KERNELS:
+        return "sequential"
+    return "auto"
 
 
 def uses_time(quantity: str, filter: str) -> bool:

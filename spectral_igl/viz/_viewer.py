@@ -5,7 +5,7 @@ import numpy as np
 
 from ._backend import NEUTRAL_COLOR, color_kind, colormap, display_available, pyvista, save_png, to_pyvista
 from ._levelsets import add_source_marker, boundary_surface, levelset_values, lines_over_surfaces, reached_vertices
-from ._quantity import FILTERED, FILTERS, QUANTITIES, evaluate, uses_time
+from ._quantity import FILTERED, FILTERS, QUANTITIES, color_meaning, evaluate, uses_time
 
 __all__ = ["Viewer"]
 
@@ -270,7 +270,7 @@ class Viewer:
         f = np.where(ok, ev.values[self._ids], np.nan)
         self.mesh.point_data["f"] = f
         fin = f[ok]
-        self.color_kind = "sequential" if self.quantity != "kernel" else color_kind(fin)
+        self.color_kind = color_kind(fin, color_meaning(self.quantity, self.filter))
         lo, hi = (float(fin.min()), float(fin.max())) if fin.size else (0.0, 1.0)
         if self.color_kind == "diverging":
             lo, hi = -max(abs(lo), abs(hi)), max(abs(lo), abs(hi))
