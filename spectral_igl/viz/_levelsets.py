@@ -144,7 +144,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     volume : {"clip", "slices", "boundary", "isosurfaces"}
         How a tetrahedral mesh is shown: boundary with the quarter ``x > x_s, y > y_s`` cut
         away (``s`` the first source, else the centre), boundary plus three
-        orthogonal slices, boundary only, or iso-surfaces inside a translucent boundary.
+        orthogonal slices (through the first source, else the centre), boundary only, or
+        iso-surfaces inside a translucent boundary.
         Iso-values of volumes are sampled in the range on the boundary (as in the survey).
     title : str, optional
         Text at the top (of each panel when ``labels`` is given).
@@ -163,8 +164,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         ``f`` (both its minimum and maximum when ``f`` is signed) -- from outside the shape, along the outward normal there when a ray test
         shows it unobstructed (else the best of a few other directions), with the up
         direction from the principal axes of the shape (:func:`spectral_igl.viz.auto_view`).
-        A tetrahedral mesh cut with ``volume="clip"`` is seen from ``"iso"``, facing the cut
-        (which passes through the first source).
+        A tetrahedral mesh drawn inside (``volume`` other than ``"boundary"``) is seen from
+        ``"iso"``, facing the cut (which passes through the first source, as do the slices).
         Or a named view ``"iso"``, ``"+x"``, ``"-z"``, ...; a direction ``(dx, dy, dz)``
         from the shape towards the camera; a pyvista camera position.
     camera_position : optional
@@ -333,8 +334,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         drawn = boundary_surface(mesh) if mkind == "tet" else mesh
         target = None
         if mode == "auto":
-            if mkind == "tet" and volume == "clip":
-                camera_j = "iso"  # the cut faces the iso view
+            if mkind == "tet" and volume != "boundary":
+                camera_j = "iso"  # the cut (and the slices) through the source face the iso view
             else:
                 camera_j = camera
                 if src.size:
