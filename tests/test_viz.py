@@ -576,3 +576,71 @@ def test_cli_view_and_cmap_options(tmp_path):
     assert_not_blank(path)
     assert main(["distance", "--shape", "sphere", "--level", "2", "--view", "sideways",
                  "-o", str(path), "-q"]) == 2
+
+
+# ---- a real window under a virtual X server, clicked by xdotool (skipped without them) ---
+_XVFB_CLICKS = r'''
+import os
+import subprocess
+import sys
+import time
+import numpy as np
+from data_generators import icosphere
+import spectral_igl as sig
+from spectral_igl.viz import Viewer
+from vtkmodules.vtkRenderingCore import vtkCoordinate
+
+lap = sig.laplacian(*icosphere(2))
+v = Viewer(lap, quantity="kernel", filter="heat", t=0.1, source=3, off_screen=False, window_size=(400, 400))
+v.plotter.show(interactive_update=True, auto_close=False)
+for _ in range(20):
+    v.plotter.update(); time.sleep(0.05)
+V = lap.data["V"]
+eye = np.asarray(v.plotter.camera.position)
+facing = [int(i) for i in np.flatnonzero(np.einsum("ij,ij->i", V, eye - V) / np.linalg.norm(eye - V, axis=1) > 0.6) if i != 3][:3]
+wid = []
+for _ in range(100):  # the window maps asynchronously
+    wid = subprocess.run(["xdotool", "search", "--onlyvisible", "--pid", str(os.getpid())],
+                         capture_output=True, text=True).stdout.split()
+    wid = wid or subprocess.run(["xdotool", "search", "--onlyvisible", "--name", "."],
+                                capture_output=True, text=True).stdout.split()
+    if wid:
+        break
+    v.plotter.update(); time.sleep(0.05)
+print("windows", wid, file=sys.stderr)
+w = wid[-1]
+got = []
+for k in facing:
+    c = vtkCoordinate(); c.SetCoordinateSystemToWorld(); c.SetValue(*map(float, V[k]))
+    x, y = c.GetComputedDisplayValue(v.plotter.renderer)
+    h = v.plotter.window_size[1]
+    subprocess.run(["xdotool", "mousemove", "--window", w, str(x), str(h - 1 - y)], check=True)
+    for _ in range(5):
+        v.plotter.update(); time.sleep(0.05)
+    subprocess.run(["xdotool", "click", "--window", w, "1"], check=True)
+    for _ in range(20):
+        v.plotter.update(); time.sleep(0.05)
+    got.append((k, v.source))
+print("RESULT", got)
+v.close()
+'''
+
+
+def test_viewer_real_clicks_under_xvfb(tmp_path):
+    """An on-screen viewer under Xvfb: xdotool moves the mouse over a vertex and clicks."""
+    import os
+    import shutil
+
+    if not (shutil.which("xvfb-run") and shutil.which("xdotool")):
+        pytest.skip("xvfb-run and xdotool are not installed")
+    script = tmp_path / "clicks.py"
+    script.write_text(_XVFB_CLICKS)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    env.pop("VTK_DEFAULT_OPENGL_WINDOW", None)  # set for off-screen rendering in this process
+    out = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", sys.executable, str(script)],
+                         capture_output=True, text=True, timeout=300, env=env)
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("RESULT")]
+    assert out.returncode == 0 and lines, out.stderr[-2000:]
+    picks = eval(lines[0][len("RESULT"):])  # [(vertex clicked, source after the click)]
+    assert len(picks) == 3 and all(k == s for k, s in picks), picks
+    assert "leak" not in out.stderr.lower()
