@@ -644,3 +644,18 @@ def test_viewer_real_clicks_under_xvfb(tmp_path):
     picks = eval(lines[0][len("RESULT"):])  # [(vertex clicked, source after the click)]
     assert len(picks) == 3 and all(k == s for k, s in picks), picks
     assert "leak" not in out.stderr.lower()
+
+
+def test_volume_cut_passes_through_an_interior_source():
+    """A tetrahedral box, source inside: the cut shows it, and the scale starts at its value."""
+    from data_generators import box_tets
+
+    V, T = box_tets((10, 8, 6))
+    lo, hi = V.min(0), V.max(0)
+    s = int(np.argmin(np.linalg.norm(V - (lo + 0.4 * (hi - lo)), axis=1)))
+    assert np.all(V[s] > lo) and np.all(V[s] < hi)  # interior
+    f = np.linalg.norm(V - V[s], axis=1)
+    p = plot_levelsets((V, T), f, sources=[s], off_screen=True, window_size=(400, 400))
+    assert p.spectral_igl_views[0]["clim"] == pytest.approx((0.0, f.max()))
+    assert _depth_check(p, V[s])
+    p.close()

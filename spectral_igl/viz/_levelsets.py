@@ -146,7 +146,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         away (``s`` the first source, else the centre), boundary plus three
         orthogonal slices (through the first source, else the centre), boundary only, or
         iso-surfaces inside a translucent boundary.
-        Iso-values of volumes are sampled in the range on the boundary (as in the survey).
+        Iso-values of volumes are sampled in the range on the boundary (as in the survey),
+        or over the whole volume when there are sources (the cut shows them).
     title : str, optional
         Text at the top (of each panel when ``labels`` is given).
     labels : list of str, optional
@@ -248,8 +249,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     cmaps = [colormap(cmap if cmap is not None else (kind if not known else
                       ("distance" if m == "sequential" else m))) for m in per_panel]
 
-    def _range(mesh, mkind, fi, ok):
-        if mkind == "tet":  # range on the boundary, as in the survey's Fig. 8
+    def _range(mesh, mkind, fi, ok, src):
+        if mkind == "tet" and (src is None or np.size(src) == 0):  # range on the boundary, as in the survey's Fig. 8
             surf = boundary_surface(mesh)
             ids = surf.point_data.get("vtkOriginalPointIds")
             if ids is not None:
@@ -258,7 +259,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         fin = fi[ok]
         return (float(fin.min()), float(fin.max())) if fin.size else (0.0, 1.0)
 
-    ranges = [_range(m, k, fi, r) for (m, k), fi, r in zip(meshes, values, reached)]
+    ranges = [_range(m, k, fi, r, sp) for (m, k), fi, r, sp in zip(meshes, values, reached, per_sources)]
     if clim is not None:
         clim = (float(clim[0]), float(clim[1]))
         ranges = [clim] * len(meshes)
@@ -489,15 +490,19 @@ def _add_volume(plotter, pv, grid, iso, volume, common, line_width, cut_at=None)
         _add_isolines(plotter, surf, iso, line_width)
         return
     if volume == "clip":
-        # cut away the quarter facing the camera (x > cx and y > cy) to show the inside
-        P = np.asarray(grid.points)
-        grid = grid.copy()
-        grid.point_data["_cut"] = np.minimum(P[:, 0] - center[0], P[:, 1] - center[1])
-        inside = grid.clip_scalar(scalars="_cut", value=0.0, invert=True)
-        inside.set_active_scalars("f")
-        shell = boundary_surface(inside)
-        plotter.add_mesh(shell, **common)
-        _add_isolines(plotter, shell, iso, line_width)
+        # cut away the quarter facing the camera (x > cx and y > cy) to show the inside: the
+        # part x < cx, and the part x > cx, y < cy, each cut by an exact plane (one cut by
+        # min(x - cx, y - cy) would leave pieces of the corner's tetrahedra standing)
+        left = grid.clip(normal=(1.0, 0.0, 0.0), origin=center, invert=True)
+        right = grid.clip(normal=(1.0, 0.0, 0.0), origin=center, invert=False)
+        right = right.clip(normal=(0.0, 1.0, 0.0), origin=center, invert=True) if right.n_cells else right
+        for part in (left, right):
+            if part.n_cells:
+                part.set_active_scalars("f")
+                shell = boundary_surface(part)
+                plotter.add_mesh(shell, **common)
+                _add_isolines(plotter, shell, iso, line_width)
+                common = dict(common, show_scalar_bar=False)
         return
     if volume == "slices":
         plotter.add_mesh(surf, opacity=0.15, color="gray", show_scalar_bar=False)
