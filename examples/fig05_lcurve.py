@@ -55,7 +55,8 @@ def main(argv=None):
     fig.tight_layout()
     images = [C.savefig(fig, out / "fig05_lcurve.png"),
               C.render(out / "fig05_volumetric_smoothing.png", [(V, T), (V, T)], [noisy, smoothed],
-                       kind="auto", volume="clip", labels=["noisy", f"smoothed, t={t_opt:.2e}"],
+                       kind="auto", volume="clip", n_levels=[0, 12],
+                       labels=["noisy", f"smoothed, t={t_opt:.2e}"],
                        window_size=(1000, 500))]
     result = {"n": lap.n, "t_opt": float(t_opt), "error_noisy": err(noisy),
               "error_smoothed": err(smoothed), "error_best_on_curve": float(errors.min()),
