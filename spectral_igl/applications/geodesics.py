@@ -5,7 +5,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._factor import factorize
-from .._validate import as_indices, as_positive, describe
+from .._validate import as_indices, as_mesh_arrays, as_positive, describe, is_mesh_object
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
 
@@ -14,9 +14,15 @@ __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge
 _STEPS = ("euler", "intrinsic_delaunay", "engine")
 
 
-def mean_edge_length(V: np.ndarray, C: np.ndarray) -> float:
-    """Mean length of the (unique) edges of a triangle or tetrahedral mesh."""
+def mean_edge_length(V, C=None) -> float:
+    """Mean length of the (unique) edges of a triangle or tetrahedral mesh.
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
     import igl
+
+    V, C = as_mesh_arrays(V, C)
+    V = np.asarray(V, dtype=float)
 
     E = igl.edges(np.ascontiguousarray(C))
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
@@ -103,7 +109,10 @@ def _as_laplacian(lap_or_mesh, mass: str = "lumped") -> Laplacian:
     if isinstance(lap_or_mesh, (tuple, list)) and len(lap_or_mesh) == 2:
         V, C = lap_or_mesh
         return laplacian(V, C, mass=mass)
-    raise TypeError(f"expected a Laplacian or a (V, F) / (V, T) pair, got {describe(lap_or_mesh)}")
+    if is_mesh_object(lap_or_mesh):
+        return laplacian(*as_mesh_arrays(lap_or_mesh, name="mesh"), mass=mass)
+    raise TypeError(f"expected a Laplacian, a (V, F) / (V, T) pair or a pyvista/trimesh mesh, "
+                    f"got {describe(lap_or_mesh)}")
 
 
 def _cells(lap: Laplacian) -> np.ndarray:
@@ -124,7 +133,7 @@ class HeatGeodesics:
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
         A triangle or tetrahedral mesh Laplacian (its ``L`` and ``B`` are used), or the
         arrays, in which case the cotangent Laplacian with lumped mass is built.
     t : float, optional
@@ -227,7 +236,7 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
         Triangle or tetrahedral mesh.
     source : int or (s,) int
         Source vertex (or vertices: distance to the nearest).
@@ -260,7 +269,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
     source : int
         Source vertex.
     t : float, optional
