@@ -45,6 +45,7 @@ import scipy.sparse as sp
 
 from .kernels import _check_delta, _check_filter, _check_lap, _operator
 from .laplacian import dense_eigs, eigs
+from .progress import progress_bar
 
 __all__ = ["kernel_diagonal", "distance_colouring"]
 
@@ -376,16 +377,18 @@ class _SelinvKernel:
                           shape=(self.lap.n, self.lap.n_components))
         return S @ (S.T @ e)
 
-    def diagonal(self):
+    def diagonal(self, progress=None):
         """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
         if self._diag is None:
-            self._diag = self._power_diagonal() if self.power else self._rational_diagonal()
+            self._diag = self._power_diagonal() if self.power else self._rational_diagonal(progress)
         return self._diag
 
-    def _rational_diagonal(self):
+    def _rational_diagonal(self, progress=None):
         diag = np.zeros(self.lap.n)
-        for c, k, fac in self._factors():
-            diag += k * (c * fac.inverse_diagonal()).real
+        with progress_bar(len(self.pf.terms), "kernel diagonal", progress, unit="pole") as bar:
+            for c, k, fac in self._factors():
+                diag += k * (c * fac.inverse_diagonal()).real
+                bar.update()
         diag += self.pf.alpha0.real * self.minv
         if self.filt.singular:
             diag -= self._kernel_part()
@@ -432,7 +435,8 @@ def _selinv_kernel(lap, filt, tol) -> _SelinvKernel:
 def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int | None = None,
                     distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
                     max_colours: int | None = None, tol: float = 1e-8,
-                    engine_method: str = "auto", seed: int = 0, return_info: bool = False):
+                    engine_method: str = "auto", seed: int = 0, return_info: bool = False,
+                    progress=None):
     r"""Diagonal of the spectral kernel :math:`G = \varphi(\tilde L)B^{-1}` at every vertex.
 
     .. math:: G_{ii} = \sum_l \varphi(\lambda_l)\, x_l(i)^2
@@ -482,6 +486,10 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         chosen, the ``predicted_rel_error``; for ``"exact"`` the certified
         ``abs_error_bound`` (max over vertices).
 
+    progress : bool, optional
+        Draw a progress bar on stderr, one step per pole (``"selinv"``) or block of 64 columns or colours; see :mod:`spectral_igl.progress`
+        (default: off).
+
     Returns
     -------
     diag : (n,) float (complex for a complex filter)
@@ -523,13 +531,14 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
                              "and a lumped mass for delta='seed'")
         try:
             kern = _selinv_kernel(lap, filt, tol)
-            diag, bound = kern.diagonal()
+            diag, bound = kern.diagonal(progress)
             nfac = kern.n_factorizations
         except _NoSelinv as exc:
             if not auto:
                 raise ValueError(f"method='selinv' cannot handle {filt.name!r}: {exc}; use 'probing'") from None
             return kernel_diagonal(lap, filt, "dense" if n <= EXACT_MAX else "probing", delta, k, distance,
-                                   samples, rtol, max_colours, tol, engine_method, seed, return_info)
+                                   samples, rtol, max_colours, tol, engine_method, seed, return_info,
+                                   progress)
         if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
             diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
         info.update(factorizations=nfac, abs_error_bound=float(bound.max(initial=0.0)))
@@ -556,6 +565,7 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         diag = np.empty(n, dtype=dtype)
         bound = np.zeros(n)
         minv = 1.0 / lap.mass
+        bar = progress_bar(-(-n // block), "kernel diagonal", progress, unit="block")
         for a in range(0, n, block):
             idx = np.arange(a, min(a + block, n))
             E = np.zeros((n, idx.size))
@@ -566,6 +576,8 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
             # |e_i^T dY| <= ||B^-1 e_i||_B ||dY||_B, (B^-1)_ii <= 5/m_i for linear FEM masses
             fac = 1.0 if lap.lumped else 5.0
             bound[idx] = eb * np.sqrt(fac * minv[idx]) if delta == "mass" else np.nan
+            bar.update()
+        bar.close()
         info["applications"] = n
         info["abs_error_bound"] = float(np.max(bound)) if np.all(np.isfinite(bound)) else float("nan")
         return (diag, info) if return_info else diag
@@ -596,6 +608,7 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     info.update(distance=distance, colours=ncol, k=k)
     diag = np.zeros(n, dtype=dtype)
     rows = np.arange(n)
+    bar = progress_bar(-(-ncol // block), "kernel diagonal", progress, unit="block")
     for a in range(0, ncol, block):
         cols = np.arange(a, min(a + block, ncol))
         sel = (colours >= cols[0]) & (colours <= cols[-1])
@@ -603,6 +616,8 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         Z[rows[sel], colours[sel] - a] = 1.0
         Y = G(Z)
         diag[sel] = Y[rows[sel], colours[sel] - a]
+        bar.update()
+    bar.close()
     info["applications"] += ncol
     if k > 0:
         lam, W = _low_rank(lap, k, delta)

@@ -4,11 +4,41 @@ Every public call that can run for more than a few seconds takes ``progress=Fals
 With ``progress=True`` it draws a `tqdm <https://tqdm.github.io>`_ bar on stderr whose
 steps mean something: one per factorization or pole, per colour block, per source
 block, per time, per candidate time, per shape. With ``progress=False`` (the default)
-nothing is written.
+nothing is written. The default, ``progress=None``, means off unless the call runs
+inside :func:`enabled` (the command line does this, so its bars reach every stage).
 """
 from __future__ import annotations
 
-__all__ = ["progress_bar", "NoProgress"]
+import contextlib
+import contextvars
+
+import numpy as np
+
+__all__ = ["progress_bar", "enabled", "NoProgress"]
+
+_DEFAULT = contextvars.ContextVar("spectral_igl_progress", default=False)
+
+
+@contextlib.contextmanager
+def enabled(on: bool = True):
+    """Within this context, calls given ``progress=None`` draw their bars (or not).
+
+    Parameters
+    ----------
+    on : bool
+        Whether ``progress=None`` means on inside the context.
+
+    Examples
+    --------
+    >>> from spectral_igl import progress
+    >>> with progress.enabled(False):
+    ...     progress.progress_bar(3, "work").update()
+    """
+    token = _DEFAULT.set(bool(on))
+    try:
+        yield
+    finally:
+        _DEFAULT.reset(token)
 
 
 class NoProgress:
@@ -39,7 +69,7 @@ class NoProgress:
         return iter(())
 
 
-def progress_bar(total, desc: str = "", enable: bool = False, unit: str = "step", leave=None):
+def progress_bar(total, desc: str = "", enable: bool | None = None, unit: str = "step", leave=None):
     """A tqdm progress bar on stderr, or a silent :class:`NoProgress` when not enabled.
 
     Parameters
@@ -48,8 +78,9 @@ def progress_bar(total, desc: str = "", enable: bool = False, unit: str = "step"
         Number of steps (``None``: unknown, the bar counts without a percentage).
     desc : str
         Label shown before the bar.
-    enable : bool
-        ``False`` returns a :class:`NoProgress` that writes nothing.
+    enable : bool or None
+        ``False`` returns a :class:`NoProgress` that writes nothing; ``None`` follows
+        :func:`enabled` (off by default).
     unit : str
         Name of one step (``"pole"``, ``"block"``, ``"time"``, ...).
     leave : bool, optional
@@ -64,7 +95,7 @@ def progress_bar(total, desc: str = "", enable: bool = False, unit: str = "step"
     Raises
     ------
     TypeError
-        ``enable`` is not a bool.
+        ``enable`` is neither a bool nor None.
 
     Examples
     --------
@@ -73,8 +104,10 @@ def progress_bar(total, desc: str = "", enable: bool = False, unit: str = "step"
     ...     for _ in range(3):
     ...         bar.update()
     """
-    if not isinstance(enable, bool):
-        raise TypeError(f"progress must be True or False, got {type(enable).__name__} {enable!r}")
+    if enable is None:
+        enable = _DEFAULT.get()
+    if not isinstance(enable, (bool, np.bool_)):
+        raise TypeError(f"progress must be True, False or None, got {type(enable).__name__} {enable!r}")
     if not enable:
         return NoProgress()
     import sys
@@ -85,3 +118,4 @@ def progress_bar(total, desc: str = "", enable: bool = False, unit: str = "step"
         leave = not any(not getattr(b, "disable", True) for b in list(getattr(tqdm, "_instances", ())))
     return tqdm(total=None if total is None else int(total), desc=desc, unit=unit, leave=leave,
                 file=sys.stderr, dynamic_ncols=True, mininterval=0.2)
+

@@ -8,6 +8,7 @@ from .._factor import factorize
 from .._validate import as_indices, as_mesh_arrays, as_positive, describe, is_mesh_object
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
+from ..progress import progress_bar
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
 
@@ -150,6 +151,13 @@ class HeatGeodesics:
         source (:math:`e^{-d^2/4h^2} < 10^{-8}`) it is below the engine's certified
         absolute accuracy and its normalised gradient is noise, while the backward-Euler
         kernel decays only exponentially and keeps a usable direction everywhere.
+    mollify : float
+        Intrinsic mollification of ``step="intrinsic_delaunay"``, relative to the mean
+        edge length.
+    progress : bool, optional
+        A progress bar on stderr over the precomputation: operators, heat
+        factorization, Poisson factorization (see :mod:`spectral_igl.progress`; default
+        off).
 
     Examples
     --------
@@ -163,7 +171,7 @@ class HeatGeodesics:
     """
 
     def __init__(self, lap_or_mesh, t: float | None = None, step: str = "intrinsic_delaunay",
-                 mollify: float = 1e-6):
+                 mollify: float = 1e-6, progress=None):
         import igl
 
         if step not in _STEPS:
@@ -175,6 +183,8 @@ class HeatGeodesics:
         self.lap, self.step = lap, step
         self.n = lap.n
         self.mollify = float(mollify)
+        bar = progress_bar(3, "heat geodesics", progress, unit="step")
+        bar.set_postfix_str("operators")
         if step == "intrinsic_delaunay":
             self.G, self.A, Lp, M, self.h = intrinsic_operators(V, C, mollify=self.mollify)
             self._dim = 2
@@ -188,16 +198,22 @@ class HeatGeodesics:
             M = sp.diags(lap.mass).tocsr()
             self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
+        bar.update()
+        bar.set_postfix_str("heat factorization")
         if step == "engine":
             from .. import SpectralOperator, filters
 
             self._op = SpectralOperator(lap, filters.heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
+        bar.update()
+        bar.set_postfix_str("Poisson factorization")
         # Poisson solve: ground one vertex per component (the rhs is consistent)
         ground = np.unique(lap.components, return_index=True)[1]
         self._free = np.setdiff1d(np.arange(self.n), ground)
         self._poisson = factorize(sp.csr_matrix(Lp[self._free][:, self._free]))
+        bar.update()
+        bar.close()
 
     def _diffuse(self, delta: np.ndarray) -> np.ndarray:
         if self.step == "engine":
@@ -231,7 +247,7 @@ class HeatGeodesics:
 
 
 def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None = None,
-                      step: str = "intrinsic_delaunay"):
+                      step: str = "intrinsic_delaunay", progress=None):
     r"""Geodesic distance from ``source`` by the heat method or Varadhan's formula.
 
     Parameters
@@ -249,13 +265,16 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
         length, and :math:`4h^2` for Varadhan.
     step : str
         Heat step of the heat method, see :class:`HeatGeodesics`.
+    progress : bool, optional
+        Heat method: a progress bar over the precomputation (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
     (n,) float
     """
     if method == "heat":
-        return HeatGeodesics(lap_or_mesh, t=t, step=step).compute(source)
+        return HeatGeodesics(lap_or_mesh, t=t, step=step, progress=progress).compute(source)
     if method == "varadhan":
         return varadhan_distance(lap_or_mesh, source, t=t)
     raise ValueError(f"method must be 'heat' or 'varadhan', got {method!r}")
