@@ -142,7 +142,7 @@ class SpectralOperator:
     >>> lap = sig.laplacian(*icosphere(3))
     >>> op = sig.SpectralOperator(lap, filters.heat(0.01), method="rational")
     >>> u = op.apply(np.ones(lap.n))          # heat preserves constants
-    >>> bool(np.allclose(u, 1.0)), op.error_bound < 1e-8 * np.sqrt(lap.area())
+    >>> bool(np.allclose(u, 1.0)), bool(op.error_bound < 1e-8 * np.sqrt(lap.area()))
     (True, True)
     """
 
