@@ -279,11 +279,34 @@ def as_mesh_arrays(V, F=None, name: str = "V", need_cells: bool = True):
     >>> V.shape, F.tolist()
     ((3, 3), [[0, 1, 2]])
     """
+    kind = type(V).__name__ if is_mesh_object(V) else None
     V, F = _mesh_arrays(V, F, name)
+    if kind is not None and F is not None:
+        _warn_coincident(V, kind)
     if need_cells and F is None:
         raise TypeError(f"F is missing: pass (V, F) arrays, or a mesh object with triangles or "
                         f"tetrahedra as {name}; got {name} = {describe(V)}")
     return V, F
+
+
+def _warn_coincident(points, kind: str) -> None:
+    """Warn when points of a mesh object coincide: the object is cut along them.
+
+    File readers that split vertices at texture seams or normal creases (pyvista's and
+    trimesh's OBJ readers do) give such objects; every cut becomes a boundary.
+    """
+    import warnings
+
+    P = np.asarray(points)
+    if P.ndim != 2 or len(P) < 2:
+        return
+    dup = len(P) - len(np.unique(P, axis=0))
+    if dup:
+        warnings.warn(f"{dup} of the {len(P)} points of the {kind} coincide with another point, "
+                      f"so the shape is cut along them (a reader that splits vertices at texture "
+                      f"seams does this). Merge them first (pyvista: mesh.clean(); trimesh: "
+                      f"mesh.merge_vertices(merge_tex=True, merge_norm=True)) or read the file "
+                      f"with spectral_igl.io.read_mesh", RuntimeWarning, stacklevel=4)
 
 
 def _mesh_arrays(V, F, name):

@@ -179,3 +179,17 @@ def test_progress_context_and_bad_flag(lap, capfd):
     assert isinstance(progress_bar(3, "x"), NoProgress)    # off outside the context
     with pytest.raises(TypeError, match="progress must be True, False or None"):
         sig.hks(lap, 1e-3, progress="yes")
+
+
+def test_mesh_object_cut_at_coincident_points_is_warned():
+    """A reader that splits vertices at texture seams cuts the shape: say so."""
+    pv = pytest.importorskip("pyvista")
+    V, F = icosphere(2)
+    cut = V[F].reshape(-1, 3)                  # every triangle with its own three corners
+    soup = pv.PolyData(cut, np.c_[np.full(len(F), 3), np.arange(3 * len(F)).reshape(-1, 3)].ravel())
+    with pytest.warns(RuntimeWarning, match=r"of the 960 points of the PolyData coincide.*clean\(\)"):
+        lap = sig.laplacian(soup)
+    assert lap.n_components == len(F)          # what the warning is about
+    merged = sig.laplacian(soup.clean())       # the advice works: one closed sphere again
+    assert merged.n == len(V) and merged.n_components == 1
+    assert np.isclose(merged.area(), sig.laplacian(V, F).area())
