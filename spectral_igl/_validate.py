@@ -21,7 +21,13 @@ __all__ = [
     "describe",
     "as_mesh_arrays",
     "is_mesh_object",
+    "as_array",
+    "as_delta",
+    "DELTAS",
 ]
+
+#: the discrete deltas of a kernel column: B^-1 e_i (converges) or e_i (the survey's Eq. (5))
+DELTAS = ("mass", "seed")
 
 
 def describe(x) -> str:
@@ -35,7 +41,7 @@ def describe(x) -> str:
     return f"{type(x).__name__} {x!r}"[:200]
 
 
-def _to_array(x, name: str) -> np.ndarray:
+def as_array(x, name: str) -> np.ndarray:
     if x is None:
         raise TypeError(f"{name} must be an array, got None")
     if isinstance(x, (str, bytes, dict, set)):
@@ -56,7 +62,7 @@ def as_points(V, name: str = "V", dims=(2, 3), min_rows: int = 1) -> np.ndarray:
 
     ``dims`` lists the admissible numbers of columns.
     """
-    a = _to_array(V, name)
+    a = as_array(V, name)
     if a.dtype.kind not in "biuf":
         raise TypeError(f"{name} must hold real numbers, got {describe(a)}")
     if a.ndim != 2 or a.shape[1] not in tuple(dims):
@@ -77,7 +83,7 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
     Returns int64, C-contiguous. Rejects floats that are not whole numbers,
     negative and out-of-range indices, and empty arrays.
     """
-    a = _to_array(F, name)
+    a = as_array(F, name)
     if a.ndim != 2 or a.shape[1] not in tuple(sizes):
         want = " or ".join(f"(m, {k})" for k in sizes)
         raise ValueError(f"{name} must have shape {want}, got {describe(a)}")
@@ -99,7 +105,7 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
 
 def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndarray:
     """Validate a signal of shape ``(n,)`` or ``(n, k)``; return float64 or complex128."""
-    a = _to_array(f, name)
+    a = as_array(f, name)
     if a.dtype.kind == "c" and not allow_complex:
         raise TypeError(f"{name} must be real, got {describe(a)}")
     if a.dtype.kind not in "biufc":
@@ -127,7 +133,7 @@ def as_index(i, n: int, name: str = "source") -> int:
 
 def as_indices(idx, n: int, name: str = "sources", allow_empty: bool = False) -> np.ndarray:
     """Validate a 1-D array of vertex indices in ``[0, n)``; scalars become length 1."""
-    a = _to_array(idx, name)
+    a = as_array(idx, name)
     if a.ndim == 0:
         a = a.reshape(1)
     if a.ndim != 1:
@@ -326,3 +332,8 @@ def _mesh_arrays(V, F, name):
         return pts, _cells_from_dict(dict(V.cells_dict), what)
     tris = _polydata_faces(V.faces, what)                             # PolyData
     return pts, (tris if len(tris) else None)
+def as_delta(delta) -> str:
+    """Validate the ``delta`` argument of kernels and distances (one of :data:`DELTAS`)."""
+    if not isinstance(delta, str) or delta not in DELTAS:
+        raise ValueError(f"delta must be 'mass' (B^-1 e_i, converges) or 'seed' (e_i), got {describe(delta)}")
+    return delta

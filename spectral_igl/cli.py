@@ -24,13 +24,24 @@ from pathlib import Path
 
 import numpy as np
 
+from ._version import __version__
+from .applications import diffusion_smooth, geodesic_distance, optimal_time
+from .approx import METHODS
+from .descriptors import hks
+from .diagonal import METHODS as DIAGONAL_METHODS
+from .filters import FILTERS
+from .io import read_mesh, write_mesh
+from .laplacian import laplacian
+from .progress import enabled as progress_enabled
+from .progress import progress_bar
+from .quantity import evaluate
+
 __all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
 
-_FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "commute_time", "biharmonic", "polyharmonic")
-_METHODS = ("auto", "rational", "krylov", "chebyshev", "taylor", "euler", "power", "taylor1",
-            "contour", "eigen", "dense")
+_FILTERS = tuple(FILTERS)
+_METHODS = METHODS
 _OUTPUTS = (".npy", ".csv", ".png", ".vtu", ".vtk", ".ply")
 _FIELD_MESHES = (".vtu", ".vtk", ".ply")
 _SHAPES = ("sphere", "box", "torus", "cylinder")
@@ -113,7 +124,7 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+    p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
                    help="distances: how the kernel diagonal is obtained (selinv: selected "
                         "inversion, certified; exact: one application per vertex; probing: "
                         "colouring estimator; default auto: selinv where it applies)")
@@ -121,8 +132,6 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
 
 def build_parser():
     """The ``argparse`` parser of ``spectral-igl``."""
-    from . import __version__
-
     parser = argparse.ArgumentParser(
         prog="spectral-igl",
         description="Laplacian spectral kernels and distances on 3-D shapes, spectrum-free "
@@ -161,7 +170,7 @@ def build_parser():
                    help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+    p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
                    help="how the diagonal K_t(i, i) is obtained: selinv (selected inversion, "
                         "certified), exact (one application per vertex), probing (colouring "
                         "estimator), dense; default auto (selinv)")
@@ -224,7 +233,6 @@ def _load_shape(args):
     if args.mesh is None and not getattr(args, "shape", None):
         raise CLIError("no input: give a MESH file or --shape sphere", EXIT_USAGE)
     if args.mesh is not None:
-        from .io import read_mesh
 
         try:
             V, C = read_mesh(args.mesh)
@@ -262,8 +270,6 @@ def _check_outputs(outs, allowed):
 
 
 def _laplacian(V, C, args):
-    from . import laplacian
-
     try:
         return laplacian(V, C, weights=args.weights, mass=args.mass)
     except ValueError as err:
@@ -312,12 +318,9 @@ def _write(outs, values, V, C, args, sources=None, kind="distance", title="", na
             f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
             plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
         elif ext in _FIELD_MESHES:
-            from .io import write_mesh
-
             cols = [values] if values.ndim == 1 else [values[:, j] for j in range(values.shape[1])]
             write_mesh(path, V, C, fields=dict(zip(names, cols)))
         else:
-            from .io import write_mesh
 
             write_mesh(path, values, C)
 
@@ -329,10 +332,6 @@ def _say(args, text):
 
 # ---- jobs ---------------------------------------------------------------------------------
 def _job_kernel_distance(args):
-    from .viz._quantity import FILTERS, evaluate
-
-    from .progress import progress_bar
-
     _check_outputs(args.out, _OUTPUTS)
     prog = progress_bar(4, args.job, unit="step")
     prog.set_postfix_str("reading")
@@ -346,7 +345,7 @@ def _job_kernel_distance(args):
     prog.update()
     prog.set_postfix_str(args.job)
     t = args.time
-    if FILTERS[args.filter] and t is None:
+    if FILTERS[args.filter][1] and t is None:
         t = _default_time(lap)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
@@ -371,8 +370,6 @@ def _job_hks(args):
     times = args.times
     if times is None:
         times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
-    from . import hks
-
     start = time.perf_counter()     # one bar step per time (progress=None: the CLI's setting)
     H = np.asarray(hks(lap, np.asarray(times, dtype=float), method=args.diagonal,
                        engine_method=args.method, tol=args.tol), dtype=float).reshape(lap.n, len(times))
@@ -420,8 +417,6 @@ def _job_smooth(args):
     if geometry:  # smoothing the shape itself: the operator is that of the (noisy) shape
         V = f.copy()
     lap = _laplacian(V, C, args)
-    from . import diffusion_smooth
-
     t = args.time
     if t is None and geometry:
         # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
@@ -430,16 +425,12 @@ def _job_smooth(args):
             C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
         t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
     elif t is None:  # the L-curve corner, per column for several columns (their median)
-        from . import optimal_time
-
         cols = f.reshape(lap.n, -1).T
         t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
     g = np.asarray(diffusion_smooth(lap, f, t, method=args.method, tol=args.tol))
     seconds = time.perf_counter() - start
     if geometry:
-        from .io import write_mesh
-
         mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
         for o in mesh_outs:    # the smoothed shape (with its displacement where fields fit)
             Path(o).parent.mkdir(parents=True, exist_ok=True)
@@ -467,8 +458,6 @@ def _job_geodesic(args):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
                        EXIT_USAGE)
     lap = _laplacian(V, C, args)
-    from . import geodesic_distance
-
     start = time.perf_counter()
     d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
     seconds = time.perf_counter() - start
@@ -482,7 +471,6 @@ def _job_geodesic(args):
 
 def _job_view(args):
     from .viz import Viewer
-    from .viz._quantity import FILTERS
 
     V, C, name = _load_shape(args)
     if args.source >= len(V):
@@ -500,7 +488,7 @@ def _job_view(args):
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
         return EXIT_OK
-    from .viz._backend import headless
+    from .viz import headless
 
     if headless():
         raise CLIError("no display available: use --screenshot FILE.png to render off screen",
@@ -538,8 +526,6 @@ def _job_figures(args):
                            f"{', '.join(names)}", EXIT_USAGE)
         scripts = [p for p in scripts if any(p.stem == n or p.stem.startswith(n + "_") for n in args.only)]
     sys.path.insert(0, str(d))
-    from .progress import progress_bar
-
     prog = progress_bar(len(scripts), "figures", unit="figure")
     failed = []
     for p in scripts:
@@ -576,10 +562,8 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
-    from .progress import enabled
-
     try:
-        with enabled(bool(getattr(args, "progress", False)) and not getattr(args, "quiet", False)):
+        with progress_enabled(bool(getattr(args, "progress", False)) and not getattr(args, "quiet", False)):
             return _JOBS[args.job](args)
     except CLIError as err:
         print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
