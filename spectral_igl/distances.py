@@ -228,7 +228,7 @@ def _eigen_distance(lap, filt, s, k, delta):
 
 
 def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: str = "auto",
-                               tol: float = 1e-8, progress=None, block: int = 64):
+                               tol: float = 1e-8, progress=None, block: int = 16):
     r"""(m, m) spectral distances between all pairs of ``seeds``.
 
     .. math:: D_{ab} = \|\varphi(\tilde L)B^{-1}(e_{s_a} - e_{s_b})\|_B
@@ -251,7 +251,7 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
         A progress bar on stderr, one step per block of ``block`` seeds (see
         :mod:`spectral_igl.progress`; default off).
     block : int
-        Kernel columns computed together.
+        Kernel columns computed together: one step of the bar.
 
     Returns
     -------
