@@ -6,13 +6,13 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_points
+from .._validate import as_cells, as_mesh_arrays, as_points
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "element_measures", "mesh_components", "cotan_stiffness"]
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass", "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness"]
 
 _WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform")
-_MASSES = ("full", "lumped", "voronoi", "barycentric")
+MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -22,8 +22,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
-def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(m,) area of each triangle or volume of each tetrahedron (unsigned)."""
+def element_measures(V, C=None) -> np.ndarray:
+    """(m,) area of each triangle or volume of each tetrahedron (unsigned).
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
+    V, C = as_mesh_arrays(V, C)
+    V, C = np.asarray(V, dtype=float), np.asarray(C)
     if C.shape[1] == 3:
         e1 = V[C[:, 1]] - V[C[:, 0]]
         e2 = V[C[:, 2]] - V[C[:, 0]]
@@ -34,20 +39,23 @@ def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.abs(np.einsum("ij,ij->i", _cross(e1, e2), e3)) / 6.0
 
 
-def clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh(V, C=None, rel_tol: float = 1e-12):
     """Validate ``(V, C)`` and drop degenerate elements.
+
+    ``V`` may also be a pyvista/trimesh/meshio mesh, with ``C`` omitted.
 
     An element is degenerate when it repeats a vertex or its measure is at most
     ``rel_tol`` times the largest element measure: its cotangent weights would be
     infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
-    V, C, dropped, _ = _clean_mesh(V, C, rel_tol)
+    V, C, dropped, _ = clean_mesh_with_measures(V, C, rel_tol)
     return V, C, dropped
 
 
-def _clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
+    V, C = as_mesh_arrays(V, C)
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
     C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
@@ -73,7 +81,7 @@ def mesh_components(n: int, C: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
-def _star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
+def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     """(n, n) pattern linking each element's first vertex to its others, one direction.
 
     Its connected components (as an undirected graph) are those of
@@ -111,7 +119,7 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
     return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
 
 
-def _full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> sp.csr_matrix:
+def full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> sp.csr_matrix:
     """Consistent linear-FEM mass: |e| (1 + δ_ij) / ((k)(k+1)) per element of k vertices."""
     k = C.shape[1]
     if meas is None:
@@ -125,25 +133,27 @@ def _full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> 
     return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
-def _mass(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
+def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
     import igl
 
     if mass == "full":
-        return _full_mass(V, C, meas)
+        return full_mass(V, C, meas)
     if mass in ("lumped", "voronoi") and C.shape[1] == 3:
         return igl.massmatrix(V, C, igl.MASSMATRIX_TYPE_VORONOI).tocsr()
     # barycentric: row sums of the consistent mass (the lumped mass of tets as well)
-    return sp.diags(np.asarray(_full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
+    return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
 
-def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
+def laplacian(V, F=None, weights: str = "cotan", mass: str = "full") -> Laplacian:
     r"""Linear-FEM Laplacian of a triangle mesh ``(V, F)`` or tetrahedral mesh ``(V, T)``.
 
     Parameters
     ----------
-    V : (n, 3) float
-        Vertex positions (``(n, 2)`` allowed for planar triangle meshes).
-    F : (m, 3) or (m, 4) int
+    V : (n, 3) float, or a mesh object
+        Vertex positions (``(n, 2)`` allowed for planar triangle meshes); or a pyvista
+        ``PolyData``/``UnstructuredGrid``, ``trimesh.Trimesh`` or ``meshio.Mesh``, with
+        ``F`` omitted (its tetrahedra if it has any, else its triangles).
+    F : (m, 3) or (m, 4) int, optional
         Triangles, or tetrahedra when there are 4 columns.
     weights : {"cotan", "intrinsic_delaunay", "uniform"}
         ``"cotan"``: linear FEM stiffness (libigl ``cotmatrix``), triangles and tets.
@@ -183,9 +193,9 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
     """
     if weights not in _WEIGHTS:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
-    if mass not in _MASSES:
-        raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, C, dropped, meas = _clean_mesh(V, F)
+    if mass not in MASSES:
+        raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
+    V, C, dropped, meas = clean_mesh_with_measures(V, F)
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
@@ -195,7 +205,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
                       "using weights='cotan'", RuntimeWarning, stacklevel=2)
         weights = "cotan"
     L = cotan_stiffness(V, C, weights)
-    B = _mass(V, C, mass, meas)
+    B = mass_matrix(V, C, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
     n_unref = int(n - referenced.sum())
@@ -207,4 +217,4 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
     domain = "triangle" if C.shape[1] == 3 else "tet"
     key = "F" if domain == "triangle" else "T"
     data = {"V": V, key: C, "weights": weights, "mass": mass, "referenced": referenced}
-    return make_laplacian(L, B, domain=domain, data=data, adjacency=_star_adjacency(n, C))
+    return make_laplacian(L, B, domain=domain, data=data, adjacency=star_adjacency(n, C))

@@ -11,6 +11,8 @@ import sys
 
 import numpy as np
 
+from .._validate import as_cells, as_points, describe
+
 INSTALL_HINT = 'pip install "spectral_igl[viz]"'
 
 # Colour maps by meaning. Distances and other non-negative quantities: a sequential map
@@ -29,7 +31,7 @@ CRITICAL_COLORS = {"minimum": "#1f3cff", "maximum": "#ff2020", "saddle": "#20c02
 
 
 def headless() -> bool:
-    """True when no display server is reachable (see :func:`display_available`)."""
+    """True when no display server is reachable (see :func:`spectral_igl.viz.display_available`)."""
     return not display_available()
 
 
@@ -169,7 +171,6 @@ def to_pyvista(shape):
     kind : {"triangle", "tet", "points"}
     """
     pv = pyvista()
-    from .._validate import as_cells, as_points, describe
 
     if isinstance(shape, pv.DataSet):
         if isinstance(shape, pv.UnstructuredGrid):

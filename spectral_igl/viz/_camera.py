@@ -26,7 +26,7 @@ def parse_view(view):
     Parameters
     ----------
     view : None, str, (3,) float or pyvista camera position
-        ``None`` or ``"auto"``: choose (see :func:`auto_view`); a name in :data:`VIEWS`
+        ``None`` or ``"auto"``: choose (see :func:`spectral_igl.viz.auto_view`); a name in ``VIEWS``
         (``"iso"``, ``"+x"``, ``"-z"``, ...); a direction ``(dx, dy, dz)`` (from the shape
         towards the camera; also as the string ``"1,0.5,0"``); or a full pyvista camera
         position ``[position, focal_point, view_up]`` or a pyvista name (``"xy"``, ...).
@@ -318,7 +318,7 @@ def place_camera(plotter, surface, camera="auto", target=None):
     plotter : pyvista.Plotter
     surface : pyvista.PolyData
         What is drawn (triangles; a point set is looked at from its centre).
-    camera : see :func:`parse_view`
+    camera : see :func:`spectral_igl.viz.parse_view`
     target : (3,) float, optional
         The point to face with ``camera="auto"`` (the source or the feature drawn); without
         it ``"auto"`` is the ``"iso"`` view with the shape's own up direction.

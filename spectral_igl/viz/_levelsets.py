@@ -251,7 +251,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
 
     def _range(mesh, mkind, fi, ok, src):
         if mkind == "tet" and (src is None or np.size(src) == 0):  # range on the boundary, as in the survey's Fig. 8
-            surf = boundary_surface(mesh)
+            surf = outer_surface(mesh)
             ids = surf.point_data.get("vtkOriginalPointIds")
             if ids is not None:
                 ids = np.asarray(ids)
@@ -303,7 +303,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                 plotter.add_mesh(rest, color=neutral, render_points_as_spheres=True,
                                  point_size=point_size or 4.0, show_scalar_bar=False)
             else:
-                grey = boundary_surface(rest) if mkind == "tet" else rest
+                grey = outer_surface(rest) if mkind == "tet" else rest
                 plotter.add_mesh(grey, color=neutral, smooth_shading=True, show_scalar_bar=False)
         if mkind == "triangle":
             plotter.add_mesh(main, smooth_shading=True, show_edges=show_edges, **common)
@@ -332,7 +332,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                              font_size=_font_size(caption, panel))
         # where to look from
         mode, _ = parse_view(camera)
-        drawn = boundary_surface(mesh) if mkind == "tet" else mesh
+        drawn = outer_surface(mesh) if mkind == "tet" else mesh
         target = None
         if mode == "auto":
             if mkind == "tet" and volume != "boundary":
@@ -448,8 +448,8 @@ def split_reached(pv, mesh, mkind, ok):
     main = mesh.extract_cells(keep)
     rest = mesh.extract_cells(drop) if drop.size else None
     if mkind == "triangle":
-        main = boundary_surface(main)
-        rest = boundary_surface(rest) if rest is not None else None
+        main = outer_surface(main)
+        rest = outer_surface(rest) if rest is not None else None
     return main, rest
 
 
@@ -465,7 +465,7 @@ def lines_over_surfaces():
     vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
 
 
-def boundary_surface(grid):
+def outer_surface(grid):
     """Boundary surface of a volume, keeping ``vtkOriginalPointIds``."""
     import inspect
 
@@ -483,7 +483,7 @@ def _add_isolines(plotter, surface, iso, line_width):
 
 
 def _add_volume(plotter, pv, grid, iso, volume, common, line_width, cut_at=None):
-    surf = boundary_surface(grid)
+    surf = outer_surface(grid)
     center = np.asarray(grid.center) if cut_at is None else np.asarray(cut_at, dtype=float)
     if volume == "boundary":
         plotter.add_mesh(surf, smooth_shading=True, **common)
@@ -499,7 +499,7 @@ def _add_volume(plotter, pv, grid, iso, volume, common, line_width, cut_at=None)
         for part in (left, right):
             if part.n_cells:
                 part.set_active_scalars("f")
-                shell = boundary_surface(part)
+                shell = outer_surface(part)
                 plotter.add_mesh(shell, **common)
                 _add_isolines(plotter, shell, iso, line_width)
                 common = dict(common, show_scalar_bar=False)

@@ -3,13 +3,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import as_index
+from ..approx import METHODS
+from ..filters import FILTERS
+from ..laplacian import Laplacian, laplacian
+from ..quantity import FILTERED, QUANTITIES, color_meaning, evaluate, uses_time
 from ._backend import NEUTRAL_COLOR, color_kind, colormap, display_available, pyvista, save_png, to_pyvista
-from ._levelsets import add_source_marker, boundary_surface, levelset_values, lines_over_surfaces, reached_vertices
-from ._quantity import FILTERED, FILTERS, QUANTITIES, color_meaning, evaluate, uses_time
+from ._levelsets import add_source_marker, levelset_values, lines_over_surfaces, outer_surface, reached_vertices
 
 __all__ = ["Viewer"]
 
-METHODS = ("auto", "rational", "krylov", "chebyshev", "taylor", "euler", "eigen", "dense")
 #: a press and release closer than this (pixels) is a click (a pick), farther a drag (a rotation)
 CLICK_PIXELS = 4
 
@@ -36,12 +39,12 @@ class Viewer:
         or a :class:`~spectral_igl.Laplacian` built from one.
     quantity : {"kernel", "distance", "geodesic"}
     filter : str
-        One of :data:`spectral_igl.viz._quantity.FILTERS` (``"heat"``, ``"diffusion"``,
+        One of :data:`spectral_igl.filters.FILTERS` (``"heat"``, ``"diffusion"``,
         ``"biharmonic"``, ...).
     t : float, optional
         Initial time; default :math:`10^{-2}` times the squared bounding-box diagonal.
     method : str
-        Engine method (``"auto"``, ``"rational"``, ``"krylov"``, ...).
+        Engine method, one of :data:`spectral_igl.approx.METHODS`.
     source : int
         Initial vertex.
     n_levels : int
@@ -76,7 +79,6 @@ class Viewer:
             raise RuntimeError("no display available for an interactive window: pass "
                                "off_screen=True and use screenshot()")
         pv = pyvista()
-        from .. import Laplacian, laplacian
         from ._camera import parse_view
 
         lines_over_surfaces()
@@ -92,7 +94,7 @@ class Viewer:
             raise ValueError("the viewer draws triangle and tetrahedral meshes")
         self._grid = grid
         if kind == "tet":
-            surface = boundary_surface(grid)
+            surface = outer_surface(grid)
             self._ids = np.asarray(surface.point_data["vtkOriginalPointIds"], dtype=np.int64)
         else:
             surface = grid
@@ -109,8 +111,6 @@ class Viewer:
         diag2 = float(np.sum((self.points.max(0) - self.points.min(0)) ** 2))
         self.t = float(t) if t is not None else 1e-2 * diag2
         self._t_range = (np.log10(self.t) - 3, np.log10(self.t) + 2)
-        from .._validate import as_index
-
         self.source = as_index(source, self.lap.n, "source")
         self.last = None
         self.evaluations = 0
@@ -136,7 +136,6 @@ class Viewer:
     # ---- interactions -------------------------------------------------------------
     def on_pick(self, vertex):
         """Evaluate from ``vertex`` (an index into the mesh vertices) and redraw."""
-        from .._validate import as_index
 
         self.source = as_index(vertex, self.lap.n, "vertex")
         return self.update()
@@ -157,7 +156,7 @@ class Viewer:
 
         What a click does: a ray from the camera through the pixel hits the surface (VTK's
         cell picker, restricted to the surface); the vertex nearest to the hit becomes the
-        source. Returns the new :class:`Evaluation`, or ``None`` when the pixel shows no
+        source. Returns the new ``Evaluation``, or ``None`` when the pixel shows no
         surface.
         """
         from vtkmodules.vtkRenderingCore import vtkCellPicker

@@ -1,6 +1,8 @@
 """One place that turns (quantity, filter, t, method, source) into values on the vertices.
 
-Used by the command line and the interactive viewer. Only numpy at import time.
+Used by the command line and the interactive viewer; the names it accepts come from the
+registries :data:`spectral_igl.filters.FILTERS`, :data:`spectral_igl.approx.METHODS` and
+:data:`spectral_igl.diagonal.METHODS`.
 """
 from __future__ import annotations
 
@@ -8,23 +10,17 @@ import time
 
 import numpy as np
 
-__all__ = ["FILTERS", "QUANTITIES", "FILTERED", "make_filter", "evaluate", "Evaluation", "uses_time", "color_meaning"]
+from ._validate import as_index
+from .approx import spectral_operator
+from .distances import spectral_distance
+from .filters import FILTERS, by_name
 
-#: filter name -> whether it takes a time/scale parameter t
-FILTERS = {
-    "heat": True,
-    "diffusion": True,
-    "wave": True,
-    "mexican_hat": True,
-    "commute_time": False,
-    "biharmonic": False,
-    "polyharmonic": False,
-}
+__all__ = ["QUANTITIES", "FILTERED", "evaluate", "Evaluation", "uses_time", "color_meaning"]
+
+#: what :func:`evaluate` computes
 QUANTITIES = ("kernel", "distance", "geodesic")
 #: quantities whose value depends on the spectral filter (the geodesic distance does not)
 FILTERED = ("kernel", "distance")
-
-
 #: filters whose kernels are non-negative quantities (their rare small negative values are
 #: discretisation artefacts, drawn at the low end of a sequential scale)
 POSITIVE_KERNELS = ("heat", "diffusion")
@@ -35,6 +31,11 @@ def color_meaning(quantity: str, filter: str) -> str:
 
     Distances and heat kernels are non-negative quantities; the other kernels (biharmonic,
     commute time, wave, Mexican hat) take both signs.
+
+    Examples
+    --------
+    >>> color_meaning("distance", "biharmonic"), color_meaning("kernel", "biharmonic")
+    ('sequential', 'auto')
     """
     if quantity != "kernel" or filter in POSITIVE_KERNELS:
         return "sequential"
@@ -42,39 +43,14 @@ def color_meaning(quantity: str, filter: str) -> str:
 
 
 def uses_time(quantity: str, filter: str) -> bool:
-    """Whether the picture of ``quantity`` with ``filter`` depends on a time/scale t."""
-    return quantity in FILTERED and FILTERS.get(filter, False)
+    """Whether the picture of ``quantity`` with ``filter`` depends on a time/scale t.
 
-
-def make_filter(name: str, t: float | None = None, order: int = 3):
-    """The :mod:`spectral_igl.filters` object called ``name``.
-
-    ``"diffusion"`` is the heat filter at ``t / 2``: its square ``e^{-ts}`` defines the
-    diffusion distance at time ``t``.
+    Examples
+    --------
+    >>> uses_time("kernel", "heat"), uses_time("kernel", "biharmonic"), uses_time("geodesic", "heat")
+    (True, False, False)
     """
-    from .. import filters
-
-    if name not in FILTERS:
-        raise ValueError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
-    if FILTERS[name]:
-        if t is None:
-            raise ValueError(f"filter {name!r} needs a time t")
-        t = float(t)
-        if not np.isfinite(t) or t <= 0:
-            raise ValueError(f"t must be a positive number, got {t!r}")
-    if name == "heat":
-        return filters.heat(t)
-    if name == "diffusion":
-        return filters.heat(t / 2.0)
-    if name == "wave":
-        return filters.wave(t)
-    if name == "mexican_hat":
-        return filters.mexican_hat(t)
-    if name == "commute_time":
-        return filters.commute_time()
-    if name == "biharmonic":
-        return filters.biharmonic()
-    return filters.polyharmonic(int(order))
+    return quantity in FILTERED and filter in FILTERS and bool(FILTERS[filter][1])
 
 
 class Evaluation:
@@ -114,12 +90,13 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     source : int
         Vertex ``i``.
     filter : str
-        A name in :data:`FILTERS`.
+        A name in :data:`spectral_igl.filters.FILTERS`.
     t : float, optional
         Time/scale of the filters that take one.
     method, tol
         Passed to the spectrum-free engine.
-    diagonal : {"auto", "selinv", "exact", "probing", "dense"}
+    diagonal : str
+        One of :data:`spectral_igl.diagonal.METHODS`.
         How a one-to-all distance obtains the kernel diagonal
         (:func:`spectral_igl.spectral_distance`).
 
@@ -131,38 +108,32 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
         ``seconds``.
     """
-    from .._validate import as_index
-
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     source = as_index(source, lap.n, "source")
     if quantity == "geodesic":
-        from ..applications.geodesics import geodesic_distance
+        from .applications.geodesics import geodesic_distance
 
         start = time.perf_counter()
         values = np.asarray(geodesic_distance(lap, source), dtype=float).ravel()
         return Evaluation(values, None, time.perf_counter() - start, "geodesic distance (heat method)")
-    filt = make_filter(filter, t, order)
-    label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter] else "")
+    filt = by_name(filter, t, order)
+    label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter][1] else "")
     start = time.perf_counter()
     if quantity == "kernel":
-        from .. import SpectralOperator
-
-        op = SpectralOperator(lap, filt, method=method, tol=tol)
+        op = spectral_operator(lap, filt, method=method, tol=tol)
         e = np.zeros(lap.n)
         e[source] = 1.0
         values = op.apply_inverse_mass(e)
         bound = _bound(op.error_bound)
         values = np.real(values) if np.iscomplexobj(values) else values
     else:
-        from .. import spectral_distance
-
-        values, bound = _distance(spectral_distance, lap, filt, source, method, tol, diagonal)
+        values, bound = _distance(lap, filt, source, method, tol, diagonal)
     seconds = time.perf_counter() - start
     return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label)
 
 
-def _distance(spectral_distance, lap, filt, source, method, tol, diagonal="auto"):
+def _distance(lap, filt, source, method, tol, diagonal="auto"):
     """Distances from ``source`` and a bound on each |d - d~| (``None`` when there is none).
 
     For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``
