@@ -145,8 +145,9 @@ def test_barycenter_of_two_bumps_is_the_midpoint_bump():
     c = V.mean(0)
     i0 = int(np.argmin(np.linalg.norm(V - (c - [0.25, 0, 0]), axis=1)))
     i1 = int(np.argmin(np.linalg.norm(V - (c + [0.25, 0, 0]), axis=1)))
-    a, b = bump(V, F, i0, 2 * h)[0], bump(V, F, i1, 2 * h)[0]
-    gamma = 10 * h * h
+    a, b = bump(V, F, i0, h)[0], bump(V, F, i1, h)[0]
+    # the inputs are 18 h apart: gamma ~ d h keeps the kernel's cost quadratic out there
+    gamma = 40 * h * h
     for wts, x in (((0.5, 0.5), 0.5), ((0.75, 0.25), 0.25)):
         mu, info = wasserstein_barycenter(lap, np.c_[a, b], gamma, weights=wts, return_info=True)
         assert info["converged"]
@@ -155,9 +156,9 @@ def test_barycenter_of_two_bumps_is_the_midpoint_bump():
         target = (1 - x) * V[i0] + x * V[i1]
         # the barycentre moves the bump (it does not average the two densities)
         assert np.linalg.norm(centre - target) < 0.1 * np.linalg.norm(V[i1] - V[i0])
-        near = np.linalg.norm(V - target, axis=1) < 4 * h
-        lin = 0.5 * (a / (lap.mass @ a) + b / (lap.mass @ b)) * lap.mass
-        assert m[near].sum() > 0.3 and lin[near].sum() < 0.05
+        # its peak is at the interpolated position (a linear average peaks at the inputs,
+        # at least 3.9 h away)
+        assert np.linalg.norm(V[np.argmax(mu)] - target) < 2 * h
 
 
 def test_validation(sphere):
