@@ -71,6 +71,31 @@ def _wks_filter(e, sigma):
     return F(psi, name=f"wks({e:g},{sigma:g})", singular=False)
 
 
+#: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)
+WKS_TRACE_PROBES = 64
+
+
+def _wks_trace(lap, f, diag):
+    r""":math:`\operatorname{tr}\psi(\tilde L) = \operatorname{tr}(KB)`, K the kernel whose diagonal is ``diag``.
+
+    Lumped mass: :math:`\sum_i m_i K_{ii}`, exact. Full mass: :math:`\operatorname{tr}(KB)`
+    also needs :math:`K_{ij}` on the edges, so the spectrum is used below the dense limit
+    (exact) and Hutchinson's estimate :math:`\mathbb E[z^\top\psi(\tilde L)z]` above it.
+    """
+    if lap.lumped:
+        return float(lap.mass @ diag)
+    from ._diagonal import EXACT_MAX
+
+    if lap.n <= EXACT_MAX:
+        lam = np.asarray(dense_eigs(lap)[0])
+        return float(np.sum(f(np.maximum(lam, 0.0))))
+    from .approx import apply_filter
+
+    Z = np.random.default_rng(0).choice([-1.0, 1.0], size=(lap.n, WKS_TRACE_PROBES))
+    Y = np.real(apply_filter(lap, f, Z))
+    return float(np.mean(np.einsum("ij,ij->j", Z, Y)))
+
+
 def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen", **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
 
@@ -89,9 +114,15 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
     method : {"eigen", "auto", "selinv", "exact", "probing", "dense"}
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
-        :math:`\psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
-        :math:`\operatorname{tr}\psi_e(\tilde L)` is then :math:`\sum_i m_i K(i,i)`,
-        exact for a lumped mass matrix.
+        :math:`K = \psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
+        :math:`\operatorname{tr}\psi_e(\tilde L) = \operatorname{tr}(KB)` is then
+        :math:`\sum_i m_i K(i,i)` for a lumped mass matrix (exact); for a full mass matrix
+        :math:`\operatorname{tr}(KB) \ne \sum_i m_i K(i,i)` (the off-diagonal
+        :math:`K_{ij}B_{ij}` differ, by a factor of about 2 at high energies), so it is
+        :math:`\sum_l \psi_e(\lambda_l)` from the dense spectrum for
+        :math:`n \le 3000` (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
+        Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
+        :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
 
     Returns
     -------
@@ -117,7 +148,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         for e in Ev:
             f = _wks_filter(float(e), sigma)
             d = np.real(kernel_diagonal(lap, f, method=method, **kwargs))
-            cols.append(d / float(lap.mass @ d))
+            cols.append(d / _wks_trace(lap, f, d))
         out = np.stack(cols, axis=1)
     return out[:, 0] if E.ndim == 0 else out
 
