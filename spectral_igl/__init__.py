@@ -32,6 +32,12 @@ from .distances import (  # noqa: E402
     diffusion_distance,
     mexican_hat_distance,
     pairwise_spectral_distance,
+    pairwise_diffusion_distance,
+    pairwise_commute_time_distance,
+    pairwise_biharmonic_distance,
+    pairwise_polyharmonic_distance,
+    pairwise_wave_distance,
+    pairwise_mexican_hat_distance,
     polyharmonic_distance,
     spectral_distance,
     wave_distance,
@@ -41,7 +47,9 @@ from .kernels import heat_kernel, spectral_kernel  # noqa: E402
 
 __all__ += [
     "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
-    "spectral_distance", "pairwise_spectral_distance", "diffusion_distance",
+    "spectral_distance", "pairwise_spectral_distance", "pairwise_diffusion_distance",
+    "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",
+    "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",
     "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
     "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
     "eccentricity", "spectral_embedding",
@@ -51,13 +59,13 @@ __all__ += [
 from .applications import (  # noqa: E402
     CriticalPoints, HeatGeodesics, critical_points, diffusion_basis,
     diffusion_smooth, feature_points, geodesic_distance, harmonic, optimal_time, schrodinger,
-    smooth, smooth_constrained, varadhan_distance, wasserstein_distance,
+    smooth, smooth_constrained, varadhan_distance, wasserstein_barycenter, wasserstein_distance,
 )
 
 __all__ += [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
-    "varadhan_distance", "wasserstein_distance", "diffusion_basis", "feature_points",
+    "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger",
 ]
 # --- end applications ---
