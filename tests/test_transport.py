@@ -2,19 +2,16 @@
 from __future__ import annotations
 
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import read_shared_mesh
 
 import spectral_igl as sig
 from data_generators import icosphere
 from spectral_igl.applications import sinkhorn, wasserstein_barycenter, wasserstein_distance
 from spectral_igl.applications.geodesics import mean_edge_length
 from spectral_igl.applications.heat_steps import PositiveHeat, metzler_stiffness
-
-MESHES = Path("/work/shared/data/meshes")
-
 
 def flat_patch(n=694, seed=0):
     """Random Delaunay triangulation of the unit square: boundary, obtuse triangles."""
@@ -87,12 +84,9 @@ def test_flat_patch_converges_symmetric_debiased():
         assert wasserstein_distance(lap, a, a * (1 + 1e-3 * rng.random(lap.n)), g) < 1e-3 * d[q]
 
 
-@pytest.mark.skipif(not MESHES.is_dir(), reason="real meshes not available")
-@pytest.mark.parametrize("name", ["cow", "spot"])
+@pytest.mark.parametrize("name", ["cow.obj", "spot.obj"])
 def test_bumps_near_geodesic_at_10h2_on_real_shapes(name):
-    import igl
-
-    V, F = igl.read_triangle_mesh(str(MESHES / f"{name}.obj"))[:2]
+    V, F = read_shared_mesh(name)
     V = unit_area(V, F)
     lap = sig.laplacian(V, F)
     h = mean_edge_length(V, F)
