@@ -58,13 +58,13 @@ __all__ += [
 # --- applications ---
 from .applications import (  # noqa: E402
     CriticalPoints, HeatGeodesics, critical_points, diffusion_basis,
-    diffusion_smooth, feature_points, geodesic_distance, harmonic, optimal_time, schrodinger,
+    diffusion_smooth, feature_points, geodesic_distance, harmonic, optimal_shape_time, optimal_time, schrodinger,
     smooth, smooth_constrained, varadhan_distance, wasserstein_barycenter, wasserstein_distance,
 )
 
 __all__ += [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
-    "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
+    "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger",
 ]
