@@ -87,7 +87,7 @@ def test_fig04_anisotropic_heat(tmp_path):
 def test_fig05_lcurve(tmp_path):
     r = run("fig05_lcurve", tmp_path)
     assert r["error_smoothed"] < 0.5 * r["error_noisy"]
-    # the L-curve corner is (nearly) the best time on the curve
+    # the risk minimum is (nearly) the best time on the curve
     assert r["error_smoothed"] <= 1.25 * r["error_best_on_curve"]
 
 

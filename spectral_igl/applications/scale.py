@@ -202,6 +202,9 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     lap : Laplacian
     f : (n,) float
         Noisy function.
+    noise : float, optional
+        Per-vertex standard deviation :math:`\sigma` of the noise when known (``"risk"``);
+        default: fitted.
     ts : (k,) float, optional
         Times to try, increasing. Default: ``n_times`` log-spaced values in
         :math:`[0.01/\lambda_{\max}, 1/\lambda_2]` for ``"risk"`` (which needs the
@@ -243,8 +246,14 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     All 13 misses of ``"risk"`` are signals of degree >= 5 with 3% or 10% noise, whose
     best time is below :math:`1/\lambda_{\max}`: there the signal is about as rough as
     the mesh, hardly separable from the noise, and the gain of any smoothing is small.
-    Cost: one heat evaluation of ``1 + probes`` columns per time.
-        """
+    On unit-area real meshes (``benchmarks/optimal_time.py --real``: cow, fandisk, spot,
+    rocker-arm; two smooth functions plus 10%, 30%, 100% noise) it meets it in 24 of 24
+    cases. For a noisy shape's own coordinates use :func:`optimal_shape_time`.
+
+    Cost (``method="auto"``): two factorizations and 72 block solves of ``1 + probes``
+    columns for all the times together; 1.1 s CPU = 29 cholespy factorizations of
+    :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``).
+    """
     lap = _check_lap(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
@@ -367,6 +376,13 @@ def optimal_shape_time(lap, **kwargs):
     variance of the normal noise, :math:`\hat\sigma^2/3` (:func:`shape_noise`), rather than
     a variance fitted to the residual (which the noisy operator hides); the median of the
     three times is returned.
+
+    Measured (``benchmarks/optimal_time.py --real``, cow, fandisk, spot, rocker-arm, unit
+    area, i.i.d. or normal noise of 0.1, 0.3 and 1 mean edge length h): the time beats
+    t/10 and 10 t in 18 of 24 cases. Misses: i.i.d. noise of one edge length (all four
+    shapes; the mesh folds and 10 t is better, 0.61-0.66 of the error) and the coarse
+    cow at 0.1 h (t/10 is better, 0.85-0.96 of the error). Against the former default
+    :math:`t = h^2` it is better at 0.1 h and 0.3 h noise and worse at 1 h.
 
     Parameters
     ----------
