@@ -242,10 +242,11 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     corner sits at :math:`1/\lambda_2`). Measured with the criterion "smaller error to
     the clean signal than at t/10 and at 10 t" (``benchmarks/optimal_time.py --quick``:
     icosphere(3) and a 9x9x9 tet box, full and lumped mass, signals of degree 1 to 8 and
-    a bump, noise 3% to 100%), ``"risk"`` meets it in 59 of 72 cases, ``"lcurve"`` in 29.
-    All 13 misses of ``"risk"`` are signals of degree >= 5 with 3% or 10% noise, whose
-    best time is below :math:`1/\lambda_{\max}`: there the signal is about as rough as
-    the mesh, hardly separable from the noise, and the gain of any smoothing is small.
+    a bump, noise 3% to 100%), ``"risk"`` meets it in 58 of 72 cases, ``"lcurve"`` in 29.
+    All 14 misses of ``"risk"`` have 3% or 10% noise (signals of degree >= 5 and cos5, or
+    the bump and cos3 at 3%), whose best time is near or below :math:`1/\lambda_{\max}`:
+    there the signal is about as rough as the mesh, hardly separable from the noise, and
+    the gain of any smoothing is small.
     On unit-area real meshes (``benchmarks/optimal_time.py --real``: cow, fandisk, spot,
     rocker-arm; two smooth functions plus 10%, 30%, 100% noise) it meets it in 24 of 24
     cases. For a noisy shape's own coordinates use :func:`optimal_shape_time`.
