@@ -185,8 +185,8 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
     comes out low. Measured between bumps of width :math:`h` (``benchmarks/transport.py``:
     cow, spot and a random Delaunay unit square with boundary, n = 2.9k to 3k, unit area,
     ``steps=16``, against ``igl.exact_geodesic``), :math:`W/d - 1` at
-    :math:`\gamma = 10h^2`: +2% to +13% at :math:`d = 4h`, -2% to -1% at 6h, -7% at 8h,
-    -14% at 12h, -26% at 20h; at :math:`40h^2`: +4% to +26% at 4h, +2% to +6% at 8h,
+    :math:`\gamma = 10h^2`: +2% to +13% at :math:`d = 4h`, -2% to -1% at 6h, -7% to -6%
+    at 8h, -15% to -14% at 12h, -26% to -25% at 20h; at :math:`40h^2`: +4% to +26% at 4h, +2% to +6% at 8h,
     -2% to +2% at 12h, -9% to -2% at 20h. The error depends on :math:`d h/\gamma`: for
     bumps :math:`d` apart take :math:`\gamma \approx 2\text{--}3\, d h`. Symmetric to
     round-off (below 1e-14 relative); one call costs 0.05-0.09 s there. Below
