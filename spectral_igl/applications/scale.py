@@ -52,7 +52,7 @@ class HeatFamily:
     r"""Heat filters :math:`e^{-t\tilde L}X` for a whole range of ``t`` from two Krylov bases.
 
     Lanczos in the B-inner product, one process per column of ``X`` run in lockstep (block
-    solves), with full re-orthogonalisation:
+    solves):
 
     - a polynomial basis of :math:`\tilde L = B^{-1}L` (``k_poly`` steps, one solve with
       :math:`B` each), accurate for :math:`t\lambda_{\max} \lesssim` ``k_poly`` / 3;
@@ -90,6 +90,7 @@ class HeatFamily:
         # the kernel of L (component indicators) is invariant: split it off exactly, so the
         # bases see only non-zero eigenvalues
         Z = lap.component_basis()
+        self._Z, self._BZ = Z, self.B @ Z
         self.mean = Z @ (Z.T @ (self.B @ X))
         self.X = X - self.mean
         n = lap.n
@@ -134,10 +135,17 @@ class HeatFamily:
         size = np.full(c, k)
         for j in range(k):
             W = np.ascontiguousarray(op(np.ascontiguousarray(Q[:, j].T)).T)  # (c, n)
-            for _ in range(2):  # full re-orthogonalisation, twice
-                h = np.matmul(BQ[:, :j + 1], W[:, :, None])[:, :, 0]      # (c, j+1)
-                W -= np.matmul(h[:, None, :], Q[:, :j + 1])[:, 0]
-                alpha[:, j] += h[:, j]
+            # three-term recurrence, each term orthogonalised twice; no full
+            # re-orthogonalisation (Lanczos approximations of f(A)v stay accurate when the
+            # basis loses orthogonality, Druskin-Greenbaum-Knizhnerman 1998)
+            lo = max(j - 1, 0)
+            for _ in range(2):
+                h = np.einsum("cin,cn->ci", BQ[:, lo:j + 1], W)
+                W -= np.einsum("ci,cin->cn", h, Q[:, lo:j + 1])
+                alpha[:, j] += h[:, -1]
+            # keep the kernel out (round-off brings it back, and the shift-and-invert
+            # operator amplifies it most)
+            W -= (self._Z @ (self._BZ.T @ W.T)).T
             BW = np.ascontiguousarray((B @ W.T).T)
             b = np.sqrt(np.maximum(np.einsum("ij,ij->i", W, BW), 0.0))
             scale = np.maximum(np.abs(alpha[:, : j + 1]).max(axis=1), 1e-300)
