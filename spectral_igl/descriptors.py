@@ -73,6 +73,8 @@ def _wks_filter(e, sigma):
 
 #: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)
 WKS_TRACE_PROBES = 64
+#: largest n whose WKS normaliser (full mass) comes from the dense spectrum
+WKS_DENSE_MAX = 3000
 
 
 def _wks_trace(lap, f, diag):
@@ -84,9 +86,7 @@ def _wks_trace(lap, f, diag):
     """
     if lap.lumped:
         return float(lap.mass @ diag)
-    from ._diagonal import EXACT_MAX
-
-    if lap.n <= EXACT_MAX:
+    if lap.n <= WKS_DENSE_MAX:
         lam = np.asarray(dense_eigs(lap)[0])
         return float(np.sum(f(np.maximum(lam, 0.0))))
     from .approx import apply_filter
@@ -120,7 +120,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         :math:`\operatorname{tr}(KB) \ne \sum_i m_i K(i,i)` (the off-diagonal
         :math:`K_{ij}B_{ij}` differ, by a factor of about 2 at high energies), so it is
         :math:`\sum_l \psi_e(\lambda_l)` from the dense spectrum for
-        :math:`n \le 3000` (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
+        :math:`n \le` ``WKS_DENSE_MAX`` = 3000 (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
         Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
         :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
 

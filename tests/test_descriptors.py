@@ -126,16 +126,18 @@ def test_wks_every_mass_matrix_against_dense(mass):
 
 def test_wks_trace_estimate_above_the_dense_limit(monkeypatch):
     import spectral_igl.descriptors as D
-    import spectral_igl._diagonal as dg
 
     lap = sig.laplacian(*torus(16, 8, jitter=0.3, seed=5))
     lam, X = sig.dense_eigs(lap)
-    E = np.log(lam[len(lam) // 2])
-    f = D._wks_filter(float(E), 0.4)
-    exact = float(np.sum(f(np.maximum(lam, 0))))
-    monkeypatch.setattr(dg, "EXACT_MAX", 10)  # force the estimate
-    est = D._wks_trace(lap, f, None)
-    assert abs(est - exact) < 0.1 * exact
+    E = np.log(lam[[len(lam) // 4, len(lam) // 2]])
+    psi = np.exp(-((E[None] - np.log(np.maximum(lam[1:, None], 1e-300))) ** 2) / (2 * 0.4 ** 2))
+    ref = (X[:, 1:] ** 2) @ psi / psi.sum(axis=0)
+    monkeypatch.setattr(D, "WKS_DENSE_MAX", 10)  # force the trace estimate
+    W = sig.wks(lap, E, sigma=0.4, method="exact")
+    # the diagonal is exact, the normaliser an estimate: one factor per column
+    ratio = W / ref
+    assert np.allclose(ratio, ratio[0], rtol=1e-6)
+    assert np.all(np.abs(ratio[0] - 1) < 0.1)
 
 
 def test_adf_scale_invariant(lap_torus):
