@@ -360,13 +360,14 @@ def shape_noise(V, F) -> float:
     F = np.asarray(F, dtype=np.int64)
     if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
         raise ValueError(f"shape_noise needs a triangle mesh, got V {V.shape} and F {F.shape}")
-    n = len(V)
     A = igl.adjacency_matrix(F).astype(float)
     deg = np.asarray(A.sum(axis=1)).ravel()
     used = deg > 0
     u = V - (A @ V) / np.maximum(deg, 1.0)[:, None]
     L = -igl.cotmatrix(V, F)
-    M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+    m = np.asarray(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).diagonal(), dtype=float)
+    m[~(m > 0)] = float(m[m > 0].mean())  # unreferenced vertices: keep the system definite
+    M = sp.diags(m)
     E = igl.edges(F)
     h = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
     Vs = factorize(sp.csr_matrix(M + h * h * L)).solve(M @ V)
