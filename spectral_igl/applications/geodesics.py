@@ -4,10 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
 from .._validate import as_indices, as_positive, describe
+from ..approx import SpectralOperator
+from ..filters import heat
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
+from ..linalg import factorize
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
 
@@ -180,9 +182,7 @@ class HeatGeodesics:
             self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
         if step == "engine":
-            from .. import SpectralOperator, filters
-
-            self._op = SpectralOperator(lap, filters.heat(self.t))
+            self._op = SpectralOperator(lap, heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
         # Poisson solve: ground one vertex per component (the rhs is consistent)

@@ -21,9 +21,9 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
 from .._validate import as_positive, describe
 from ..laplacian import Laplacian
+from ..linalg import factorize
 
 __all__ = ["PositiveHeat", "metzler_stiffness"]
 

@@ -6,7 +6,10 @@ import numbers
 import numpy as np
 
 from .._validate import as_signal, describe
-from .harmonic import _check_lap
+from ..approx import apply_filter
+from ..filters import heat
+from ..laplacian import as_laplacian
+from ..linalg import factorize
 
 __all__ = ["optimal_time", "shape_noise", "optimal_shape_time", "HeatFamily"]
 
@@ -82,8 +85,6 @@ class HeatFamily:
     """
 
     def __init__(self, lap, X, tau=None, k_poly: int = 24, k_si: int = 48):
-        from .._factor import factorize
-
         self.B = lap.B.tocsr()
         X = np.asarray(X, dtype=float)
         X = X if X.ndim == 2 else X[:, None]
@@ -263,7 +264,7 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     columns for all the times together; 1.1 s CPU = 29 cholespy factorizations of
     :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``).
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
@@ -289,9 +290,6 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     if method == "auto":
         Fs = fam.apply_column(0, ts)                                    # (n, n_t)
     else:
-        from ..approx import apply_filter
-        from ..filters import heat
-
         Ys = [np.real(apply_filter(lap, heat(t), X, method=method, tol=tol)) for t in ts]
         Fs = np.stack([Y[:, 0] for Y in Ys], axis=1)
     D = Fs - f[:, None]
@@ -354,8 +352,6 @@ def shape_noise(V, F) -> float:
     import igl
     import scipy.sparse as sp
 
-    from .._factor import factorize
-
     V = np.asarray(V, dtype=float)
     F = np.asarray(F, dtype=np.int64)
     if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
@@ -407,7 +403,7 @@ def optimal_shape_time(lap, **kwargs):
     sigma : float
         The estimated normal noise (:func:`shape_noise`).
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     if lap.domain != "triangle" or "V" not in lap.data or "F" not in lap.data:
         raise ValueError(f"optimal_shape_time needs a triangle mesh Laplacian, got domain {lap.domain!r}")
     V, F = np.asarray(lap.data["V"], dtype=float), lap.data["F"]

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 
 from .._validate import as_positive, as_signal, describe
-from .harmonic import _check_lap
+from ..laplacian import as_laplacian
 from .heat_steps import PositiveHeat
 
 __all__ = ["wasserstein_distance", "sinkhorn", "wasserstein_barycenter"]
@@ -115,7 +115,7 @@ def sinkhorn(lap, mu0, mu1, gamma, heat=None, steps: int = 16, max_iter: int = 5
     info : dict
         ``iterations``, ``marginal_error``, ``converged``, ``logv``, ``logw``.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
     heat = _heat(lap, gamma, heat, steps)
@@ -192,7 +192,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
     round-off (below 1e-14 relative); one call costs 0.05-0.09 s there. Below
     :math:`10h^2` the kernel is far from its smooth limit and the result drifts.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
     h = _mean_edge(lap)
@@ -247,7 +247,7 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
     (n,) float
         The barycentre density, :math:`\int \mu\, dA = 1`.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
     mus = as_signal(mus, lap.n, "mus", allow_complex=False)
