@@ -261,8 +261,8 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     cases. For a noisy shape's own coordinates use :func:`optimal_shape_time`.
 
     Cost (``method="auto"``): two factorizations and 72 block solves of ``1 + probes``
-    columns for all the times together; 1.1 s CPU = 29 cholespy factorizations of
-    :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``).
+    columns for all the times together; 0.7-1.0 s CPU = 16-24 cholespy factorizations
+    of :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``, three runs).
     """
     lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
