@@ -8,6 +8,7 @@ from .diagonal import kernel_diagonal
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian
 from .linalg import cached_eigs, dense_eigs
+from .progress import progress_bar
 
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
 
@@ -44,10 +45,23 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     return kernel_diagonal(lap, filt, method=method, **kwargs)
 
 
-def hks(lap, times, method: str = "auto", **kwargs):
+def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     r"""Heat kernel signature (Sun et al. 2009) at one or several times.
 
     .. math:: HKS(i, t) = K_t(i, i) = \sum_l e^{-t\lambda_l}\, x_l(i)^2
+
+    Parameters
+    ----------
+    lap : Laplacian
+    times : float or (T,) float
+        Diffusion times.
+    method : str
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal`.
+    progress : bool, optional
+        A progress bar on stderr, one step per time, with the diagonal's own bar (per
+        pole) under it (see :mod:`spectral_igl.progress`; default off).
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
 
     Returns
     -------
@@ -55,8 +69,13 @@ def hks(lap, times, method: str = "auto", **kwargs):
     """
     lap = as_laplacian(lap)
     T = _values(times, "times")
-    cols = [kernel_diagonal(lap, heat(as_positive(t, "time")), method=method, **kwargs)
-            for t in T.reshape(-1)]
+    cols = []
+    with progress_bar(T.size, "hks", progress, unit="time") as bar:
+        for t in T.reshape(-1):
+            cols.append(kernel_diagonal(lap, heat(as_positive(t, "time")), method=method,
+                                        progress=progress, **kwargs))
+            bar.set_postfix_str(f"t={t:.3g}")
+            bar.update()
     return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
 
 
@@ -95,7 +114,8 @@ def _wks_trace(lap, f, diag):
     return float(np.mean(np.einsum("ij,ij->j", Z, Y)))
 
 
-def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen", **kwargs):
+def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen",
+        progress=None, **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
 
     .. math:: WKS(i, e) = \frac{\sum_l \psi_e(\lambda_l)\, x_l(i)^2}{\sum_l \psi_e(\lambda_l)},
@@ -122,6 +142,11 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         :math:`n \le` ``WKS_DENSE_MAX`` = 3000 (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
         Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
         :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
+    progress : bool, optional
+        Spectrum-free methods: a progress bar on stderr, one step per energy (see
+        :mod:`spectral_igl.progress`; default off).
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
 
     Returns
     -------
@@ -144,10 +169,13 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
     else:
         cols = []
+        bar = progress_bar(Ev.size, "wks", progress, unit="energy")
         for e in Ev:
             f = _wks_filter(float(e), sigma)
-            d = np.real(kernel_diagonal(lap, f, method=method, **kwargs))
+            d = np.real(kernel_diagonal(lap, f, method=method, progress=progress, **kwargs))
             cols.append(d / _wks_trace(lap, f, d))
+            bar.update()
+        bar.close()
         out = np.stack(cols, axis=1)
     return out[:, 0] if E.ndim == 0 else out
 

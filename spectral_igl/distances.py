@@ -29,6 +29,7 @@ from .filters import (
 )
 from .kernels import kernel_columns
 from .laplacian import as_laplacian
+from .progress import progress_bar
 
 __all__ = [
     "spectral_distance",
@@ -77,7 +78,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
                       distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
                       max_colours: int | None = None, max_recompute: int | None = None,
-                      return_info: bool = False):
+                      return_info: bool = False, progress=None):
     r"""Spectral distance from ``source`` to ``targets`` (one, many, or all vertices).
 
     .. math:: d(i, j) = \|\varphi(\tilde L) B^{-1}(e_i - e_j)\|_B
@@ -112,6 +113,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         distance was recomputed exactly as a norm), ``unverified`` and, for one-to-all,
         ``d2_error_bound`` (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the
         diagonal is exact; then :math:`|d - \tilde d| \le` its square root).
+    progress : bool, optional
+        One-to-all: a progress bar on stderr over the diagonal's poles or blocks (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
@@ -149,7 +153,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     G2 = filt.square
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
-                                  engine_method=method, return_info=True)
+                                  engine_method=method, return_info=True, progress=progress)
     diag = np.real(diag)
     info.update(dinfo)
     e = np.zeros((n, 1))
@@ -230,7 +234,7 @@ def _eigen_distance(lap, filt, s, k, delta):
 
 
 def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: str = "auto",
-                               tol: float = 1e-8):
+                               tol: float = 1e-8, progress=None, block: int = 16):
     r"""(m, m) spectral distances between all pairs of ``seeds``.
 
     .. math:: D_{ab} = \|\varphi(\tilde L)B^{-1}(e_{s_a} - e_{s_b})\|_B
@@ -246,6 +250,22 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     applications) and their Gram matrix :math:`C^* B C`; any entry lost to cancellation
     is recomputed as the norm of the column difference, so the result is never negative.
 
+    Parameters
+    ----------
+    lap : Laplacian
+    filt : Filter
+    seeds : (m,) int
+        Vertex indices.
+    delta : {"mass", "seed"}
+        As in :func:`spectral_distance`.
+    method, tol
+        Engine approximation method and accuracy.
+    progress : bool, optional
+        A progress bar on stderr, one step per block of ``block`` seeds (see
+        :mod:`spectral_igl.progress`; default off).
+    block : int
+        Kernel columns computed together: one step of the bar.
+
     Returns
     -------
     D : (m, m) float, symmetric, zero diagonal.
@@ -254,7 +274,14 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     filt = check_filter(filt)
     delta = as_delta(delta)
     S = as_indices(seeds, lap.n, "seeds")
-    C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
+    op = spectral_operator(lap, filt, method, tol)
+    blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
+    with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
+        cols = []
+        for blk in blocks:
+            cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
+            bar.update()
+    C = np.concatenate(cols, axis=1)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()

@@ -10,6 +10,7 @@ from ..approx import apply_filter
 from ..filters import heat
 from ..laplacian import as_laplacian
 from ..linalg import factorize
+from ..progress import progress_bar
 
 __all__ = ["optimal_time", "shape_noise", "optimal_shape_time", "HeatFamily"]
 
@@ -186,7 +187,8 @@ class HeatFamily:
 
 
 def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes: int = 16,
-                 seed: int = 0, method: str = "auto", tol: float = 1e-8, noise=None):
+                 seed: int = 0, method: str = "auto", tol: float = 1e-8, noise=None,
+                 progress=None):
     r"""Diffusion time that best separates a smooth signal from white noise.
 
     For :math:`F(t) = S_t f = e^{-t\tilde L} f` the residual
@@ -232,6 +234,9 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         ``1 + probes`` columns; two factorizations and about 70 block solves in all,
         whatever the number of times). Any other value: one call of
         :func:`spectral_igl.apply_filter` per time with this method and ``tol``.
+    progress : bool, optional
+        A progress bar on stderr (see :mod:`spectral_igl.progress`; default off): one step
+        per candidate time with an explicit ``method``, one per column with ``"auto"``.
 
     Returns
     -------
@@ -289,8 +294,13 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     n_t = ts.size
     if method == "auto":
         Fs = fam.apply_column(0, ts)                                    # (n, n_t)
+        bar = progress_bar(1 + k, "optimal time", progress, unit="column")
     else:
-        Ys = [np.real(apply_filter(lap, heat(t), X, method=method, tol=tol)) for t in ts]
+        bar = progress_bar(n_t, "optimal time", progress, unit="time")
+        Ys = []
+        for t in ts:
+            Ys.append(np.real(apply_filter(lap, heat(t), X, method=method, tol=tol)))
+            bar.update()
         Fs = np.stack([Y[:, 0] for Y in Ys], axis=1)
     D = Fs - f[:, None]
     R = np.sqrt(np.maximum(np.einsum("ij,ij->j", D, lap.B @ D), 0.0))
@@ -299,11 +309,16 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     EN = np.sqrt(np.maximum(np.einsum("ij,ij->j", G, lap.B @ G), 0.0))
     RM2 = m @ D ** 2
     TMS, TRES = np.zeros(n_t), np.zeros(n_t)
+    if method == "auto":
+        bar.update()
     for j in range(k):
         S = fam.apply_column(j + 1, ts) if method == "auto" else np.stack([Y[:, j + 1] for Y in Ys], axis=1)
         p = P[:, j]
         TMS += (p * m) @ S / k
         TRES += m @ (p[:, None] - S) ** 2 / k
+        if method == "auto":
+            bar.update()
+    bar.close()
     tiny = np.finfo(float).tiny
     x, s = np.log(np.maximum(R, tiny)), np.log(ts)
     # the Dirichlet curve turns counter-clockwise at its corner, the norm curve clockwise
