@@ -18,10 +18,10 @@ __all__ += ["filters", "solvers", "apply_filter", "SpectralOperator", "lambda_ma
 
 # --- constructors ---
 from .laplacian import (anisotropic_laplacian, graph_laplacian, point_cloud_laplacian,  # noqa: E402
-                        tetrahedralize, voxel_laplacian)
+                        polygon_laplacian, tetrahedralize, voxel_laplacian)
 
 __all__ += ["point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
-            "graph_laplacian", "tetrahedralize"]
+            "graph_laplacian", "tetrahedralize", "polygon_laplacian"]
 
 # --- kernels and distances ---
 from ._diagonal import distance_colouring, kernel_diagonal  # noqa: E402

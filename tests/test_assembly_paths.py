@@ -5,7 +5,7 @@ import scipy.sparse as sp
 
 from data_generators import icosphere
 from spectral_igl.laplacian._operator import _symmetrize, _zero_row_sums
-from spectral_igl.laplacian.mesh import _full_mass, _star_adjacency, element_measures, mesh_components
+from spectral_igl.laplacian.mesh import full_mass, _star_adjacency, element_measures, mesh_components
 
 
 def _reference_zero_row_sums(L):
@@ -44,7 +44,7 @@ def test_zero_row_sums_matches_sparse_formula(diag):
 def test_full_mass_and_star_components():
     V, F = icosphere(2)
     n = len(V)
-    B = _full_mass(V, F)
+    B = full_mass(V, F)
     ref = sp.csr_matrix((n, n))
     meas = element_measures(V, F)
     for a in range(3):

@@ -7,9 +7,10 @@ from .mesh import laplacian
 from .anisotropic import anisotropic_laplacian
 from .graph import graph_laplacian
 from .points import point_cloud_laplacian
+from .polygon import polygon_laplacian
 from .tetrahedralize import tetrahedralize
 from .voxels import voxel_laplacian
 
 __all__ = ["Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs",
            "point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
-           "graph_laplacian", "tetrahedralize"]
+           "graph_laplacian", "tetrahedralize", "polygon_laplacian"]
