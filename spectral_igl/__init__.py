@@ -50,7 +50,8 @@ __all__ += [
 # --- applications ---
 from .applications import (  # noqa: E402
     CriticalPoints, HeatGeodesics, critical_points, diffusion_basis,
-    diffusion_smooth, feature_points, geodesic_distance, harmonic, optimal_time, schrodinger,
+    diffusion_smooth, feature_points, geodesic_distance, harmonic, mean_curvature_flow, optimal_time,
+    schrodinger,
     smooth, smooth_constrained, varadhan_distance, wasserstein_distance,
 )
 
@@ -58,6 +59,6 @@ __all__ += [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "diffusion_basis", "feature_points",
-    "schrodinger",
+    "schrodinger", "mean_curvature_flow",
 ]
 # --- end applications ---
