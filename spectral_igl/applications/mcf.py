@@ -86,8 +86,10 @@ def mean_curvature_flow(V, F, dt: float = 1e-3, steps: int = 10, conformal: bool
     """
     import scipy.sparse.linalg as spla
 
+    if np.ndim(F) != 2 or np.shape(F)[1] != 3:
+        raise ValueError(f"mean_curvature_flow needs triangles F of shape (m, 3), got {describe(F)}")
     V, F, _ = clean_mesh(V, F)
-    if F.shape[1] != 3 or V.shape[1] != 3:
+    if V.shape[1] != 3:
         raise ValueError(f"mean_curvature_flow needs a 3-D triangle mesh, got V {V.shape}, F {F.shape}")
     dt = as_positive(dt, "dt")
     if isinstance(steps, bool) or not isinstance(steps, (numbers.Integral, np.integer)) or steps < 0:

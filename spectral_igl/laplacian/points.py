@@ -284,6 +284,11 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     k_default, bw_default = _DEFAULTS[method]
     if method == "delaunay":
+        given = [name for name, v in (("t", t), ("radius", radius), ("bandwidth", bandwidth))
+                 if v is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)} set the heat kernel of method='belkin' or "
+                             "'liu'; method='delaunay' has no bandwidth")
         return _delaunay_laplacian(P, k_default if k is None else k)
     k = k_default if k is None else k
     bandwidth = as_positive(bw_default if bandwidth is None else bandwidth, "bandwidth")
@@ -364,6 +369,8 @@ def _delaunay_laplacian(P: np.ndarray, k) -> Laplacian:
     keep[~own.any(axis=1), -1] = False
     d = d[keep].reshape(n, k)
     J = J[keep].reshape(n, k)
+    if not np.any(d > 0):
+        raise ValueError("all points coincide: there is no tangent plane")
     nb = P[J] - P[:, None, :]
     C = np.einsum("nki,nkj->nij", nb, nb)
     _, U = np.linalg.eigh(C)
