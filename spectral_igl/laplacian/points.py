@@ -86,14 +86,17 @@ def _clip_cells(Q: np.ndarray, half: np.ndarray) -> np.ndarray:
     return np.where(cnt >= 3, area, 0.0)
 
 
-def _clip_cells_dual(Q: np.ndarray, half: np.ndarray):
+def _clip_cells_dual(Q: np.ndarray, half: np.ndarray, cut_open: bool = True):
     """Voronoi cell of the origin among the 2-D points ``Q`` (n, k, 2), with its edges.
 
     The same Sutherland--Hodgman clipping as :func:`_clip_cells`, each polygon edge
     carrying the index of the bisector it lies on (-1 for the bounding square).
-    Returns ``(area (n,), dual (n, k))`` with ``dual[i, j]`` the length of the cell's
-    edge on the bisector of ``Q[i, j]`` (0 when that neighbour is not a Voronoi
-    neighbour).
+    Returns ``(area (n,), dual (n, k), open (n,) bool)`` with ``dual[i, j]`` the length
+    of the cell's edge on the bisector of ``Q[i, j]`` (0 when that neighbour is not a
+    Voronoi neighbour) and ``open`` true where the cell reaches the square. With
+    ``cut_open``, open cells are those of the local Delaunay star with its hull edges:
+    their bisector edges that reach the square are cut at the primal edge's midpoint;
+    without it they are clipped by the square.
     """
     n, k, _ = Q.shape
     s = half[:, None]
@@ -129,14 +132,35 @@ def _clip_cells_dual(Q: np.ndarray, half: np.ndarray):
         # padding repeats the last vertex: close the polygon from it with the last label
         last = np.take_along_axis(olab, np.maximum(cnt - 1, 0)[:, None], axis=1)
         lab = np.where(np.arange(width)[None, :] >= (cnt - 1)[:, None], last, lab)
-    x, y = poly[..., 0], poly[..., 1]
-    area = 0.5 * np.abs(np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1))
-    seg = np.linalg.norm(np.roll(poly, -1, axis=1) - poly, axis=2)
-    ok = (cnt >= 3)[:, None] & (lab >= 0)
+    # Walk the cnt real vertices of each cell. An edge on bisector j whose neighbour edge
+    # lies on the bounding square is a ray of an open (boundary) cell: it is cut at the
+    # midpoint q_j / 2 of the primal edge, so that the dual length and the area are those
+    # of the circumcentric dual of the local Delaunay star (1/2 cot of the one angle).
+    width = poly.shape[1]
+    m = np.arange(width)[None, :]
+    valid = m < cnt[:, None]
+    nxt = np.where(m + 1 < cnt[:, None], m + 1, 0)
+    prv = np.where(m >= 1, m - 1, np.maximum(cnt - 1, 0)[:, None])
+    A = poly
+    Bn = np.take_along_axis(poly, nxt[..., None], axis=1)
+    lab_prev = np.take_along_axis(lab, prv, axis=1)
+    lab_next = np.take_along_axis(lab, nxt, axis=1)
+    bis = valid & (lab >= 0) & (cnt >= 3)[:, None]
     rows = np.broadcast_to(np.arange(n)[:, None], lab.shape)
+    mid = 0.5 * Q[rows, np.maximum(lab, 0)]
+    start = np.where((lab_prev < 0)[..., None] & cut_open, mid, A)
+    end = np.where((lab_next < 0)[..., None] & cut_open, mid, Bn)
+    edge = Bn - A
+    elen = np.linalg.norm(edge, axis=2)
+    signed = np.einsum("nmi,nmi->nm", end - start, edge) / np.where(elen > 0, elen, 1.0)
+    use = bis & (signed > 0)
+    tri = 0.5 * (start[..., 0] * end[..., 1] - start[..., 1] * end[..., 0])
+    # the square's edges count toward the area of an uncut cell
+    area = np.where(use | (valid & (lab < 0) & (not cut_open)), tri, 0.0).sum(axis=1)
     dual = np.zeros((n, k))
-    np.add.at(dual, (rows[ok], lab[ok]), seg[ok])
-    return np.where(cnt >= 3, area, 0.0), dual
+    np.add.at(dual, (rows[use], lab[use]), signed[use])
+    is_open = np.any(valid & (lab < 0), axis=1)
+    return np.where(cnt >= 3, np.maximum(area, 0.0), 0.0), dual, is_open
 
 
 def tangent_voronoi_areas(P, k: int = 24) -> np.ndarray:
@@ -186,7 +210,8 @@ _DEFAULTS = {"delaunay": (20, 1.0), "belkin": (64, 0.9), "liu": (128, 1.1)}
 
 
 def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=None,
-                          radius: float | None = None, bandwidth: float | None = None) -> Laplacian:
+                          radius: float | None = None, bandwidth: float | None = None,
+                          boundary: bool = False) -> Laplacian:
     r"""Laplacian of a point cloud sampled from a surface.
 
     * ``"delaunay"`` (default): cotangent weights of the local Delaunay triangulation in
@@ -249,6 +274,19 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     bandwidth : float or None
         Heat methods only: the factor in the adaptive bandwidth above. ``None``: 0.9 for
         ``"belkin"``, 1.1 for ``"liu"``.
+    boundary : bool
+        ``"delaunay"`` only: the points sample a surface *with boundary* (free, Neumann).
+        A cell that its ``k`` neighbours leave open is taken to be on the boundary: it
+        is the circumcentric dual of the local Delaunay star, whose hull edges keep
+        :math:`\tfrac12\cot` of their one angle (the bisector cut at the edge's
+        midpoint). ``False`` (default, closed surfaces): an open cell, which there means
+        a point short of neighbours on one side (sharp tips, anisotropic sampling), is
+        clipped by a square of half-side 1.5 times the distance to its 8th neighbour.
+        Measured on random points of a flat 2 x 1 rectangle, first 8 Neumann
+        eigenvalues, largest relative error at 4,000 -> 16,000 points: 1.2% -> 0.66% with
+        ``True``, 25% -> 13% with ``False``; on the vertices of
+        closed real shapes ``True`` is worse (spot 1.6% -> 2.7%, cow 9% -> 28%: cells
+        where the sampling is one-sided lose their far half).
 
     Returns
     -------
@@ -289,7 +327,9 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         if given:
             raise ValueError(f"{', '.join(given)} set the heat kernel of method='belkin' or "
                              "'liu'; method='delaunay' has no bandwidth")
-        return _delaunay_laplacian(P, k_default if k is None else k)
+        if not isinstance(boundary, (bool, np.bool_)):
+            raise TypeError(f"boundary must be a bool, got {describe(boundary)}")
+        return _delaunay_laplacian(P, k_default if k is None else k, bool(boundary))
     k = k_default if k is None else k
     bandwidth = as_positive(bw_default if bandwidth is None else bandwidth, "bandwidth")
     if radius is not None:
@@ -350,7 +390,34 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     return make_laplacian(L, B, domain="points", data=data, _symmetric=True)
 
 
-def _delaunay_laplacian(P: np.ndarray, k) -> Laplacian:
+def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
+    """Cell areas, Delaunay weights and openness of the points ``rows`` among ``J`` (r, k)."""
+    nb = P[J] - P[rows][:, None, :]
+    C = np.einsum("nki,nkj->nij", nb, nb)
+    _, U = np.linalg.eigh(C)
+    Q = np.einsum("nki,nij->nkj", nb, U[:, :, 1:])
+    half = 1.5 * d[:, min(7, d.shape[1] - 1)]
+    area, dual, is_open = _clip_cells_dual(Q, half, cut_open)
+    dist = np.linalg.norm(Q, axis=2)
+    w = np.where(dual > 0, dual / np.where(dist > 0, dist, 1.0), 0.0)
+    return area, w, is_open
+
+
+def _knn(tree, P, rows, k):
+    """(d, J) of the k nearest other points of ``P[rows]``."""
+    n = P.shape[0]
+    d, J = tree.query(P[rows], k + 1, workers=-1)
+    if not np.all(np.isfinite(d)):
+        raise ValueError("neighbour distances overflow to inf: the point coordinates are too "
+                         f"large (max |P| = {np.abs(P).max():.3g}); rescale P")
+    own = J == rows[:, None]
+    keep = ~own
+    keep[~own.any(axis=1), -1] = False
+    m = len(rows)
+    return d[keep].reshape(m, k), J[keep].reshape(m, k)
+
+
+def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     from scipy.spatial import cKDTree
 
     n = P.shape[0]
@@ -360,31 +427,18 @@ def _delaunay_laplacian(P: np.ndarray, k) -> Laplacian:
     if k < 3:
         raise ValueError(f"k must be at least 3, got {k}")
     k = min(k, n - 1)
-    d, J = cKDTree(P).query(P, k + 1, workers=-1)
-    if not np.all(np.isfinite(d)):
-        raise ValueError("neighbour distances overflow to inf: the point coordinates are too "
-                         f"large (max |P| = {np.abs(P).max():.3g}); rescale P")
-    own = J == np.arange(n)[:, None]
-    keep = ~own
-    keep[~own.any(axis=1), -1] = False
-    d = d[keep].reshape(n, k)
-    J = J[keep].reshape(n, k)
+    tree = cKDTree(P)
+    rows = np.arange(n)
+    d, J = _knn(tree, P, rows, k)
     if not np.any(d > 0):
         raise ValueError("all points coincide: there is no tangent plane")
-    nb = P[J] - P[:, None, :]
-    C = np.einsum("nki,nkj->nij", nb, nb)
-    _, U = np.linalg.eigh(C)
-    Q = np.einsum("nki,nij->nkj", nb, U[:, :, 1:])
-    half = 1.5 * d[:, min(7, k - 1)]
-    area, dual = _clip_cells_dual(Q, half)
-    dist = np.linalg.norm(Q, axis=2)
-    w = np.where(dual > 0, dual / np.where(dist > 0, dist, 1.0), 0.0)
-    r = np.repeat(np.arange(n), k)
-    W = sp.csr_matrix((w.ravel(), (r, J.ravel())), shape=(n, n))
-    W.eliminate_zeros()
+    area, w, is_open = _star(P, rows, d, J, boundary)
+    r = np.repeat(rows, k)
+    nz = w.ravel() > 0
+    W = sp.csr_matrix((w.ravel()[nz], (r[nz], J.ravel()[nz])), shape=(n, n))
     W = ((W + W.T) * 0.5).tocsr()
     good = np.isfinite(area) & (area > 0)
     if not good.all():
         area = np.where(good, area, float(np.mean(area[good])) if good.any() else 1.0)
-    data = {"P": P, "method": "delaunay", "k": k, "radius": None}
+    data = {"P": P, "method": "delaunay", "k": k, "radius": None, "boundary": boundary}
     return make_laplacian(-W, sp.diags(area).tocsr(), domain="points", data=data)
