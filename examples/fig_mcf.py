@@ -30,7 +30,7 @@ def main(argv=None):
     from spectral_igl.laplacian.mesh import element_measures, full_mass
 
     V, F, name = C.surface(args)
-    steps = 12 if args.quick else 30
+    steps = 20 if args.quick else 30
     dt = 5e-3
     H = sig.mean_curvature_flow(V, F, dt=dt, steps=steps, history=True)
     shown = [0, steps // 4, steps // 2, steps]
