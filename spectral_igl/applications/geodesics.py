@@ -4,19 +4,28 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
-from .._validate import as_indices, as_positive, describe
+from .._validate import as_indices, as_mesh_arrays, as_positive, describe, is_mesh_object
+from ..approx import SpectralOperator
+from ..filters import heat
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
+from ..linalg import factorize
+from ..progress import progress_bar
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
 
 _STEPS = ("euler", "intrinsic_delaunay", "engine")
 
 
-def mean_edge_length(V: np.ndarray, C: np.ndarray) -> float:
-    """Mean length of the (unique) edges of a triangle or tetrahedral mesh."""
+def mean_edge_length(V, C=None) -> float:
+    """Mean length of the (unique) edges of a triangle or tetrahedral mesh.
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
     import igl
+
+    V, C = as_mesh_arrays(V, C)
+    V = np.asarray(V, dtype=float)
 
     E = igl.edges(np.ascontiguousarray(C))
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
@@ -103,7 +112,10 @@ def _as_laplacian(lap_or_mesh, mass: str = "lumped") -> Laplacian:
     if isinstance(lap_or_mesh, (tuple, list)) and len(lap_or_mesh) == 2:
         V, C = lap_or_mesh
         return laplacian(V, C, mass=mass)
-    raise TypeError(f"expected a Laplacian or a (V, F) / (V, T) pair, got {describe(lap_or_mesh)}")
+    if is_mesh_object(lap_or_mesh):
+        return laplacian(*as_mesh_arrays(lap_or_mesh, name="mesh"), mass=mass)
+    raise TypeError(f"expected a Laplacian, a (V, F) / (V, T) pair or a pyvista/trimesh mesh, "
+                    f"got {describe(lap_or_mesh)}")
 
 
 def _cells(lap: Laplacian) -> np.ndarray:
@@ -124,7 +136,7 @@ class HeatGeodesics:
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
         A triangle or tetrahedral mesh Laplacian (its ``L`` and ``B`` are used), or the
         arrays, in which case the cotangent Laplacian with lumped mass is built.
     t : float, optional
@@ -141,6 +153,13 @@ class HeatGeodesics:
         source (:math:`e^{-d^2/4h^2} < 10^{-8}`) it is below the engine's certified
         absolute accuracy and its normalised gradient is noise, while the backward-Euler
         kernel decays only exponentially and keeps a usable direction everywhere.
+    mollify : float
+        Intrinsic mollification of ``step="intrinsic_delaunay"``, relative to the mean
+        edge length.
+    progress : bool, optional
+        A progress bar on stderr over the precomputation: operators, heat
+        factorization, Poisson factorization (see :mod:`spectral_igl.progress`; default
+        off).
 
     Examples
     --------
@@ -154,7 +173,7 @@ class HeatGeodesics:
     """
 
     def __init__(self, lap_or_mesh, t: float | None = None, step: str = "intrinsic_delaunay",
-                 mollify: float = 1e-6):
+                 mollify: float = 1e-6, progress=None):
         import igl
 
         if step not in _STEPS:
@@ -166,6 +185,8 @@ class HeatGeodesics:
         self.lap, self.step = lap, step
         self.n = lap.n
         self.mollify = float(mollify)
+        bar = progress_bar(3, "heat geodesics", progress, unit="step")
+        bar.set_postfix_str("operators")
         if step == "intrinsic_delaunay":
             self.G, self.A, Lp, M, self.h = intrinsic_operators(V, C, mollify=self.mollify)
             self._dim = 2
@@ -179,16 +200,20 @@ class HeatGeodesics:
             M = sp.diags(lap.mass).tocsr()
             self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
+        bar.update()
+        bar.set_postfix_str("heat factorization")
         if step == "engine":
-            from .. import SpectralOperator, filters
-
-            self._op = SpectralOperator(lap, filters.heat(self.t))
+            self._op = SpectralOperator(lap, heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
+        bar.update()
+        bar.set_postfix_str("Poisson factorization")
         # Poisson solve: ground one vertex per component (the rhs is consistent)
         ground = np.unique(lap.components, return_index=True)[1]
         self._free = np.setdiff1d(np.arange(self.n), ground)
         self._poisson = factorize(sp.csr_matrix(Lp[self._free][:, self._free]))
+        bar.update()
+        bar.close()
 
     def _diffuse(self, delta: np.ndarray) -> np.ndarray:
         if self.step == "engine":
@@ -222,12 +247,12 @@ class HeatGeodesics:
 
 
 def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None = None,
-                      step: str = "intrinsic_delaunay"):
+                      step: str = "intrinsic_delaunay", progress=None):
     r"""Geodesic distance from ``source`` by the heat method or Varadhan's formula.
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
         Triangle or tetrahedral mesh.
     source : int or (s,) int
         Source vertex (or vertices: distance to the nearest).
@@ -240,13 +265,16 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
         length, and :math:`4h^2` for Varadhan.
     step : str
         Heat step of the heat method, see :class:`HeatGeodesics`.
+    progress : bool, optional
+        Heat method: a progress bar over the precomputation (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
     (n,) float
     """
     if method == "heat":
-        return HeatGeodesics(lap_or_mesh, t=t, step=step).compute(source)
+        return HeatGeodesics(lap_or_mesh, t=t, step=step, progress=progress).compute(source)
     if method == "varadhan":
         return varadhan_distance(lap_or_mesh, source, t=t)
     raise ValueError(f"method must be 'heat' or 'varadhan', got {method!r}")
@@ -260,7 +288,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
 
     Parameters
     ----------
-    lap_or_mesh : Laplacian or (V, F) or (V, T)
+    lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
     source : int
         Source vertex.
     t : float, optional
@@ -289,8 +317,6 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     length ``h`` the discrete kernel also departs from the smooth one for
     :math:`t \lesssim h^2`. Measured accuracy is in ``benchmarks/geodesics.py``.
     """
-    from .. import SpectralOperator, filters
-
     lap = _as_laplacian(lap_or_mesh)
     src = as_indices(source, lap.n, "source")
     if src.size != 1:
@@ -300,7 +326,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     t = 4.0 * h ** 2 if t is None else as_positive(t, "t")
     e = np.zeros(lap.n)
     e[src[0]] = 1.0
-    op = SpectralOperator(lap, filters.heat(t), method=method, tol=tol)
+    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
     K = np.real(op.apply_inverse_mass(e))
     D = 2.0 if lap.domain == "triangle" else 3.0
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -6,7 +6,11 @@ import numbers
 import numpy as np
 
 from .._validate import as_signal, describe
-from .harmonic import _check_lap
+from ..approx import apply_filter
+from ..filters import heat
+from ..laplacian import as_laplacian, lambda_max
+from ..linalg import eigs
+from ..progress import progress_bar
 
 __all__ = ["optimal_time"]
 
@@ -49,7 +53,7 @@ def _noise_variance(ts, res2, T, t_max):
 
 
 def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes: int = 16,
-                 seed: int = 0, method: str = "auto", tol: float = 1e-8):
+                 seed: int = 0, method: str = "auto", tol: float = 1e-8, progress=None):
     r"""Diffusion time that best separates a smooth signal from white noise.
 
     For :math:`F(t) = S_t f = e^{-t\tilde L} f` the residual
@@ -90,6 +94,9 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     method, tol
         Passed to :func:`spectral_igl.apply_filter` for each time; ``"auto"`` is
         ``"chebyshev"`` here, the cheapest for a block of ``1 + probes`` columns.
+    progress : bool, optional
+        A progress bar on stderr, one step per candidate time (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
@@ -115,10 +122,8 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     the mesh, hardly separable from the noise, and the gain of any smoothing is small.
     Cost: one heat evaluation of ``1 + probes`` columns per time.
         """
-    from .. import apply_filter, filters
-    from ..laplacian import eigs
 
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
@@ -126,8 +131,6 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         raise ValueError(f"rule must be 'risk' or 'lcurve', got {rule!r}")
     if isinstance(probes, bool) or not isinstance(probes, numbers.Integral) or probes < 1:
         raise ValueError(f"probes must be a positive integer, got {describe(probes)}")
-    from .. import lambda_max
-
     lmax = float(lambda_max(lap))
     if ts is None:
         lam = np.asarray(eigs(lap, lap.n_components + 1)[0])
@@ -147,8 +150,10 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     if method == "auto":
         method = "chebyshev"
     R, ED, EN, RM2, TMS, TRES = (np.empty(n_t) for _ in range(6))
+    bar = progress_bar(n_t, "optimal time", progress, unit="time")
     for i, t in enumerate(ts):
-        Y = np.real(apply_filter(lap, filters.heat(t), X, method=method, tol=tol))
+        Y = np.real(apply_filter(lap, heat(t), X, method=method, tol=tol))
+        bar.update()
         F = Y[:, 0]
         d = F - f
         R[i] = np.sqrt(max(d @ (lap.B @ d), 0.0))
@@ -160,6 +165,7 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
             S = Y[:, 1:]
             TMS[i] = float(np.mean(np.einsum("ij,ij->j", P, m[:, None] * S)))
             TRES[i] = float(np.mean(m @ (P - S) ** 2))
+    bar.close()
     tiny = np.finfo(float).tiny
     x, s = np.log(np.maximum(R, tiny)), np.log(ts)
     # the Dirichlet curve turns counter-clockwise at its corner, the norm curve clockwise

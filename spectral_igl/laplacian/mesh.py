@@ -6,15 +6,16 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_points
+from .._validate import as_cells, as_mesh_arrays, as_points
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "element_measures", "mesh_components", "cotan_stiffness",
-           "full_mass", "mean_value_weights"]
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass",
+           "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness",
+           "mean_value_weights"]
 
 _WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform", "mean_value")
 _ELEMENTS = ("auto", "triangle", "tet", "polygon")
-_MASSES = ("full", "lumped", "voronoi", "barycentric")
+MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -24,8 +25,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
-def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(m,) area of each triangle or volume of each tetrahedron (unsigned)."""
+def element_measures(V, C=None) -> np.ndarray:
+    """(m,) area of each triangle or volume of each tetrahedron (unsigned).
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
+    V, C = as_mesh_arrays(V, C)
+    V, C = np.asarray(V, dtype=float), np.asarray(C)
     if C.shape[1] == 3:
         e1 = V[C[:, 1]] - V[C[:, 0]]
         e2 = V[C[:, 2]] - V[C[:, 0]]
@@ -36,20 +42,23 @@ def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.abs(np.einsum("ij,ij->i", _cross(e1, e2), e3)) / 6.0
 
 
-def clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh(V, C=None, rel_tol: float = 1e-12):
     """Validate ``(V, C)`` and drop degenerate elements.
+
+    ``V`` may also be a pyvista/trimesh/meshio mesh, with ``C`` omitted.
 
     An element is degenerate when it repeats a vertex or its measure is at most
     ``rel_tol`` times the largest element measure: its cotangent weights would be
     infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
-    V, C, dropped, _ = _clean_mesh(V, C, rel_tol)
+    V, C, dropped, _ = clean_mesh_with_measures(V, C, rel_tol)
     return V, C, dropped
 
 
-def _clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
+    V, C = as_mesh_arrays(V, C)
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
     C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
@@ -75,7 +84,7 @@ def mesh_components(n: int, C: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
-def _star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
+def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     """(n, n) pattern linking each element's first vertex to its others, one direction.
 
     Its connected components (as an undirected graph) are those of
@@ -160,7 +169,7 @@ def full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> s
     return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
-def _mass(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
+def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
     import igl
 
     if mass == "full":
@@ -213,14 +222,16 @@ def _element_kind(V, F, elements: str):
     return ("cells", F)
 
 
-def laplacian(V, F, weights: str = "cotan", mass: str = "full", elements: str = "auto") -> Laplacian:
+def laplacian(V, F=None, weights: str = "cotan", mass: str = "full", elements: str = "auto") -> Laplacian:
     r"""Laplacian of a triangle mesh ``(V, F)``, tetrahedral mesh ``(V, T)`` or polygon mesh.
 
     Parameters
     ----------
-    V : (n, 3) float
-        Vertex positions (``(n, 2)`` allowed for planar triangle meshes).
-    F : (m, 3), (m, 4) or (m, k) int, or a list of index lists
+    V : (n, 3) float, or a mesh object
+        Vertex positions (``(n, 2)`` allowed for planar triangle meshes); or a pyvista
+        ``PolyData``/``UnstructuredGrid``, ``trimesh.Trimesh`` or ``meshio.Mesh``, with
+        ``F`` omitted (its tetrahedra if it has any, else its triangles).
+    F : (m, 3), (m, 4) or (m, k) int, or a list of index lists, optional
         Triangles, tetrahedra, or polygons; see ``elements``.
     elements : {"auto", "triangle", "tet", "polygon"}
         How to read ``F``. ``"auto"``: 3 columns are triangles; 5 or more columns, or a
@@ -282,10 +293,12 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full", elements: str = 
     """
     if weights not in _WEIGHTS:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
-    if mass not in _MASSES:
-        raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
+    if mass not in MASSES:
+        raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
     if elements not in _ELEMENTS:
         raise ValueError(f"elements must be one of {_ELEMENTS}, got {elements!r}")
+    if F is None:
+        V, F = as_mesh_arrays(V, F)
     F = _element_kind(V, F, elements)
     if F[0] == "polygon":
         from .polygon import polygon_laplacian
@@ -300,7 +313,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full", elements: str = 
         raise ValueError(f"elements='tet' needs an (m, 4) array, got shape {np.shape(F[1])}")
     if elements == "triangle" and np.shape(F[1])[1:] != (3,):
         raise ValueError(f"elements='triangle' needs an (m, 3) array, got shape {np.shape(F[1])}")
-    V, C, dropped, meas = _clean_mesh(V, F[1])
+    V, C, dropped, meas = clean_mesh_with_measures(V, F[1])
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
@@ -310,7 +323,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full", elements: str = 
                       "using weights='cotan'", RuntimeWarning, stacklevel=2)
         weights = "cotan"
     L = cotan_stiffness(V, C, weights)
-    B = _mass(V, C, mass, meas)
+    B = mass_matrix(V, C, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
     n_unref = int(n - referenced.sum())
@@ -322,4 +335,4 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full", elements: str = 
     domain = "triangle" if C.shape[1] == 3 else "tet"
     key = "F" if domain == "triangle" else "T"
     data = {"V": V, key: C, "weights": weights, "mass": mass, "referenced": referenced}
-    return make_laplacian(L, B, domain=domain, data=data, adjacency=_star_adjacency(n, C))
+    return make_laplacian(L, B, domain=domain, data=data, adjacency=star_adjacency(n, C))
