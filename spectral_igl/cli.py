@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
-from .applications import diffusion_smooth, geodesic_distance, optimal_time
+from .applications import diffusion_smooth, geodesic_distance, optimal_shape_time, optimal_time
 from .approx import METHODS
 from .descriptors import hks
 from .diagonal import METHODS as DIAGONAL_METHODS
@@ -188,8 +188,9 @@ def build_parser():
                         "signal's range) -- for demonstrations")
     p.add_argument("--seed", type=int, default=0, help="seed of --noise")
     p.add_argument("-t", "--time", type=_positive, default=None,
-                   help="diffusion time (default: for --signal, the corner of the L-curve, "
-                        "optimal_time; for the shape itself, the squared mean edge length)")
+                   help="diffusion time (default: for --signal, the minimum of the estimated "
+                        "risk, optimal_time; for the shape itself, the same risk rule with the "
+                        "noise measured along the normals, optimal_shape_time)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8)
@@ -418,13 +419,13 @@ def _job_smooth(args):
         V = f.copy()
     lap = _laplacian(V, C, args)
     t = args.time
-    if t is None and geometry:
-        # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
-        # corner is where the shape itself shrinks away; smooth at the scale of an edge
-        E = C[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2) if C.shape[1] == 3 else \
-            C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
-        t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
-    elif t is None:  # the L-curve corner, per column for several columns (their median)
+    if t is None and geometry and C.shape[1] == 3:
+        # the risk rule with the shape's normal noise (the noisy operator hides it)
+        t = optimal_shape_time(lap)[0]
+    elif t is None and geometry:
+        # tetrahedra: no normal noise to measure; the risk rule per coordinate (median)
+        t = float(np.median([optimal_time(lap, c)[0] for c in f.T]))
+    elif t is None:  # the minimum of the estimated risk, per column (their median)
         cols = f.reshape(lap.n, -1).T
         t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()

@@ -7,7 +7,7 @@ from ._validate import as_positive, describe
 from .diagonal import kernel_diagonal
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian
-from .linalg import cached_eigs
+from .linalg import cached_eigs, dense_eigs
 from .progress import progress_bar
 
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
@@ -89,6 +89,31 @@ def _wks_filter(e, sigma):
     return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=False, key=("wks", e, sigma))
 
 
+#: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)
+WKS_TRACE_PROBES = 64
+#: largest n whose WKS normaliser (full mass) comes from the dense spectrum
+WKS_DENSE_MAX = 3000
+
+
+def _wks_trace(lap, f, diag):
+    r""":math:`\operatorname{tr}\psi(\tilde L) = \operatorname{tr}(KB)`, K the kernel whose diagonal is ``diag``.
+
+    Lumped mass: :math:`\sum_i m_i K_{ii}`, exact. Full mass: :math:`\operatorname{tr}(KB)`
+    also needs :math:`K_{ij}` on the edges, so the spectrum is used below the dense limit
+    (exact) and Hutchinson's estimate :math:`\mathbb E[z^\top\psi(\tilde L)z]` above it.
+    """
+    if lap.lumped:
+        return float(lap.mass @ diag)
+    if lap.n <= WKS_DENSE_MAX:
+        lam = np.asarray(dense_eigs(lap)[0])
+        return float(np.sum(f(np.maximum(lam, 0.0))))
+    from .approx import apply_filter
+
+    Z = np.random.default_rng(0).choice([-1.0, 1.0], size=(lap.n, WKS_TRACE_PROBES))
+    Y = np.real(apply_filter(lap, f, Z))
+    return float(np.mean(np.einsum("ij,ij->j", Z, Y)))
+
+
 def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen",
         progress=None, **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
@@ -108,9 +133,15 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
     method : {"eigen", "auto", "selinv", "exact", "probing", "dense"}
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
-        :math:`\psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
-        :math:`\operatorname{tr}\psi_e(\tilde L)` is then :math:`\sum_i m_i K(i,i)`,
-        exact for a lumped mass matrix.
+        :math:`K = \psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
+        :math:`\operatorname{tr}\psi_e(\tilde L) = \operatorname{tr}(KB)` is then
+        :math:`\sum_i m_i K(i,i)` for a lumped mass matrix (exact); for a full mass matrix
+        :math:`\operatorname{tr}(KB) \ne \sum_i m_i K(i,i)` (the off-diagonal
+        :math:`K_{ij}B_{ij}` differ, by a factor of about 2 at high energies), so it is
+        :math:`\sum_l \psi_e(\lambda_l)` from the dense spectrum for
+        :math:`n \le` ``WKS_DENSE_MAX`` = 3000 (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
+        Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
+        :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
     progress : bool, optional
         Spectrum-free methods: a progress bar on stderr, one step per energy (see
         :mod:`spectral_igl.progress`; default off).
@@ -142,7 +173,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         for e in Ev:
             f = _wks_filter(float(e), sigma)
             d = np.real(kernel_diagonal(lap, f, method=method, progress=progress, **kwargs))
-            cols.append(d / float(lap.mass @ d))
+            cols.append(d / _wks_trace(lap, f, d))
             bar.update()
         bar.close()
         out = np.stack(cols, axis=1)

@@ -41,6 +41,12 @@ __all__ = [
     "polyharmonic_distance",
     "wave_distance",
     "mexican_hat_distance",
+    "pairwise_diffusion_distance",
+    "pairwise_commute_time_distance",
+    "pairwise_biharmonic_distance",
+    "pairwise_polyharmonic_distance",
+    "pairwise_wave_distance",
+    "pairwise_mexican_hat_distance",
 ]
 
 BLOCK = 64
@@ -233,6 +239,13 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
 
     .. math:: D_{ab} = \|\varphi(\tilde L)B^{-1}(e_{s_a} - e_{s_b})\|_B
 
+    The filter is :math:`\varphi` itself and the distance uses :math:`|\varphi|^2`, as in
+    :func:`spectral_distance`: ``pairwise_spectral_distance(lap, filters.heat(t), S)`` is
+    the diffusion distance at time :math:`2t`, since :math:`|e^{-ts}|^2 = e^{-2ts}`. For
+    the named distances use :func:`pairwise_diffusion_distance` (time ``t`` as in
+    :func:`diffusion_distance`), :func:`pairwise_biharmonic_distance`, ..., which pass
+    the filter whose square is the named one.
+
     From the m kernel columns :math:`C = \varphi(\tilde L)B^{-1}E_S` (m engine
     applications) and their Gram matrix :math:`C^* B C`; any entry lost to cancellation
     is recomputed as the norm of the column difference, so the result is never negative.
@@ -398,3 +411,56 @@ class OneToAll:
 
     def __repr__(self) -> str:
         return f"OneToAll({self.filter!r}, n={self.lap.n}, diagonal={self.info.get('method')!r})"
+
+
+# ---------------------------------------------------------------------------------------
+# named pairwise distances: the same filters as the one-to-all functions above
+# ---------------------------------------------------------------------------------------
+def pairwise_diffusion_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) diffusion distances at time ``t`` between ``seeds``; entries equal
+    :func:`diffusion_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l e^{-t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+
+    (the filter passed to :func:`pairwise_spectral_distance` is ``heat(t / 2)``).
+    Keyword arguments as in :func:`pairwise_spectral_distance`.
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, heat(t / 2.0), seeds, **kwargs)
+
+
+def pairwise_commute_time_distance(lap, seeds, **kwargs):
+    r"""(m, m) commute-time distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-1}|x_l(s_a)-x_l(s_b)|^2`;
+    entries equal :func:`commute_time_distance`."""
+    return pairwise_spectral_distance(lap, commute_time(), seeds, **kwargs)
+
+
+def pairwise_biharmonic_distance(lap, seeds, **kwargs):
+    r"""(m, m) biharmonic distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-2}|x_l(s_a)-x_l(s_b)|^2`;
+    entries equal :func:`biharmonic_distance`."""
+    return pairwise_spectral_distance(lap, biharmonic(), seeds, **kwargs)
+
+
+def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
+    r"""(m, m) poly-harmonic distances of order ``k``,
+    :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2`; entries equal
+    :func:`polyharmonic_distance`."""
+    return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
+
+
+def pairwise_wave_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) wave-kernel distances, :math:`|\varphi|^2 = 1`; entries equal :func:`wave_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, wave(t), seeds, **kwargs)
+
+
+def pairwise_mexican_hat_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) Mexican-hat distances; entries equal :func:`mexican_hat_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, mexican_hat(t), seeds, **kwargs)

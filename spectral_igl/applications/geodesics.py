@@ -281,8 +281,8 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
 
 
 def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bool = True,
-                      method: str = "auto", tol: float = 1e-12):
-    r"""Geodesic distance from the heat kernel by Varadhan's formula.
+                      steps: int = 64):
+    r"""Geodesic distance from the heat kernel by Varadhan's formula, finite everywhere.
 
     .. math:: d(p, q)^2 = \lim_{t\to 0} -4t \log K_t(p, q)
 
@@ -298,25 +298,38 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
         :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
         volumes), i.e. use :math:`d^2 = -4t \log((4\pi t)^{D/2} K_t)`; without it the
         estimate is off by :math:`2Dt\log(4\pi t)` in :math:`d^2` even at the source.
-    method, tol
-        Passed to :class:`spectral_igl.SpectralOperator` for :math:`K_t = e^{-t\tilde
-        L}B^{-1}`.
+    steps : int, default 64
+        Backward-Euler steps of the kernel (see below). Halved automatically until no
+        value underflows.
 
     Returns
     -------
     (n,) float
-        ``inf`` where the computed kernel is not positive (it has fallen below the
-        accuracy of the evaluation).
+        Finite on the source's connected component, ``inf`` on the others.
 
     Notes
     -----
-    The formula needs :math:`\log K_t` far from the source, where :math:`K_t` is
-    :math:`e^{-d^2/4t}` small: an absolute error :math:`\epsilon` of the evaluated
-    kernel makes every distance beyond about :math:`\sqrt{4t\log(1/\epsilon)}` unusable.
-    Small ``t`` is needed for the limit, large ``t`` for the range; on a mesh of edge
-    length ``h`` the discrete kernel also departs from the smooth one for
-    :math:`t \lesssim h^2`. Measured accuracy is in ``benchmarks/geodesics.py``.
+    :math:`\log K_t` is needed where :math:`K_t` is :math:`e^{-d^2/4t}` small, i.e. to a
+    relative accuracy the engine's (absolute) bounds do not give. The kernel is
+    therefore :math:`P^N e_p/m_p` with :math:`P = (M + \tfrac tN L)^{-1}M`, a Metzler
+    stiffness and the lumped mass
+    (:class:`~spectral_igl.applications.heat_steps.PositiveHeat`): positive everywhere
+    on the component and accurate relative to itself; it decays no faster than
+    :math:`e^{-d\sqrt{N/t}}`, so it does not underflow unless :math:`d\sqrt{N/t}`
+    exceeds about 700 (then ``steps`` is halved).
+
+    Accuracy band, measured against ``igl.exact_geodesic`` (cow and a jittered flat
+    Delaunay square, unit area, n = 2.9k, default :math:`t = 4h^2` and ``steps``),
+    median relative error (range) by distance from the source: :math:`[2h, 5h)`: +1% to
+    +6% (-21% to +14%); :math:`[5h, 10h)`: -1% (-10% to +9%); :math:`[10h, 20h)`: -7% to
+    -12% (-19% to +2%); :math:`[20h, 40h)`: -13% to -19% (-38% to -10%); beyond
+    :math:`40h`: -32%. Beyond about :math:`2.5\,t/h` every sparse operator's kernel
+    decays like the mesh graph's, more slowly than the Gaussian, and the distance comes
+    out low; a larger ``t`` widens the band (at :math:`8h^2`: -2% to -4% for
+    :math:`[10h, 20h)`) at the price of the smallest distances.
     """
+    from .heat_steps import PositiveHeat
+
     lap = _as_laplacian(lap_or_mesh)
     src = as_indices(source, lap.n, "source")
     if src.size != 1:
@@ -324,16 +337,18 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     V, C = lap.data["V"], _cells(lap)
     h = mean_edge_length(V, C)
     t = 4.0 * h ** 2 if t is None else as_positive(t, "t")
-    e = np.zeros(lap.n)
-    e[src[0]] = 1.0
-    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
-    K = np.real(op.apply_inverse_mass(e))
+    heat = PositiveHeat(lap, t, steps=steps)
+    comp = lap.components == lap.components[src[0]]
+    while True:
+        K = heat.column(src[0])
+        if np.all(K[comp] > 0) or heat.steps == 1:
+            break
+        heat = PositiveHeat(lap, t, steps=max(1, heat.steps // 2))
     D = 2.0 if lap.domain == "triangle" else 3.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logk = np.where(K > 0, np.log(np.where(K > 0, K, 1.0)), -np.inf)
-        if normalize:
-            logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
-        d2 = -4.0 * t * logk
-    d = np.sqrt(np.maximum(d2, 0.0))
-    d[~np.isfinite(d2)] = np.inf
-    return d
+    out = np.full(lap.n, np.inf)
+    with np.errstate(divide="ignore"):
+        logk = np.log(K[comp])
+    if normalize:
+        logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
+    out[comp] = np.sqrt(np.maximum(-4.0 * t * logk, 0.0))
+    return out
