@@ -62,7 +62,8 @@ def main(argv=None):
     fig.tight_layout()
     images = [C.savefig(fig, out / "fig05_lcurve.png"),
               C.render(out / "fig05_volumetric_smoothing.png", [(V, T), (V, T)], [noisy, smoothed],
-                       kind="cyclic", volume="clip", labels=["noisy", f"smoothed, t={t_opt:.2e} (risk)"],
+                       kind="auto", volume="clip", n_levels=[0, 12],
+                       labels=["noisy", f"smoothed, t={t_opt:.2e} (risk)"],
                        window_size=(1000, 500))]
     result = {"n": lap.n, "t_opt": float(t_opt), "t_lcurve_corner": float(t_corner),
               "error_at_corner": err(np.asarray(sig.diffusion_smooth(lap, noisy, t_corner))), "error_noisy": err(noisy),

@@ -38,9 +38,9 @@ def main(argv=None):
     count = lambda cp: int(cp.n_minima + cp.n_maxima + cp.n_saddles)  # noqa: E731
     span = float(np.ptp(f))
     images = [
-        C.render(out / "fig25_input.png", (V, F), f, kind="cyclic", critical=cp0, sources=fixed,
+        C.render(out / "fig25_input.png", (V, F), f, kind="auto", critical=cp0, sources=fixed,
                  title=f"input: {count(cp0)} critical points", zoom=1.3),
-        C.render(out / "fig25_constrained_smoothing.png", (V, F), g, kind="cyclic", critical=cp1,
+        C.render(out / "fig25_constrained_smoothing.png", (V, F), g, kind="auto", critical=cp1,
                  sources=fixed, title=f"smoothed, {fixed.size} constraints: {count(cp1)} critical points",
                  zoom=1.3),
     ]

@@ -54,7 +54,7 @@ def main(argv=None):
              [f"(d) k={k}: {100 * linf(Vk[k]):.2f}%" for k in ks]
     images = [C.savefig(fig, out / "fig26_lcurve.png"),
               C.render(out / "fig26_truncated_smoothing.png", shapes, dev, kind="distance",
-                       labels=labels, window_size=(330 * len(shapes), 380), zoom=1.3)]
+                       labels=labels, n_levels=0, window_size=(330 * len(shapes), 380))]
     result = {"n": lap.n, "t": float(t), "noise_estimate": float(sigma),
               "linf_noisy": linf(Vn), "linf_rational": linf(Vc),
               "l2_noisy": l2(Vn), "l2_rational": l2(Vc), "images": images}

@@ -34,7 +34,7 @@ from .io import read_mesh, write_mesh
 from .laplacian import laplacian
 from .progress import enabled as progress_enabled
 from .progress import progress_bar
-from .quantity import evaluate
+from .quantity import QUANTITIES, color_meaning, evaluate
 
 __all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
@@ -105,12 +105,33 @@ def _input_args(p, outputs=_OUTPUTS):
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print nothing on success (and draw no progress bar)")
     _progress_arg(p)
+    _picture_args(p)
 
 
 def _progress_arg(p):
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
                    help="progress bars on stderr, one step per factorization, pole, time or "
                         "figure (default: on)")
+
+
+def _view(text):
+    from .viz import parse_view
+
+    try:
+        parse_view(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
+
+
+def _picture_args(p):
+    p.add_argument("--view", default="auto", type=_view, metavar="VIEW",
+                   help="camera of pictures: auto (face the source from outside the shape), "
+                        "iso, +x, -x, +y, -y, +z, -z, or a direction dx,dy,dz (default auto)")
+    p.add_argument("--cmap", default=None, metavar="NAME",
+                   help="colour map of pictures (a matplotlib name); default by meaning: "
+                        "sequential for distances and non-negative values, diverging centred "
+                        "at 0 for signed ones")
 
 
 def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area)"):
@@ -210,7 +231,7 @@ def build_parser():
                                    "kernel/distance. With --screenshot it renders once off screen.")
     _input_args(p, outputs=())
     _engine_args(p, "biharmonic")
-    p.add_argument("--quantity", default="distance", choices=("distance", "kernel"))
+    p.add_argument("--quantity", default="distance", choices=QUANTITIES)
     p.add_argument("--screenshot", metavar="PNG", help="render off screen to this file and exit")
 
     p = sub.add_parser("figures", help="run the example scripts that draw the survey's figures",
@@ -296,7 +317,7 @@ def _column_names(values, names=None):
     return list(names)
 
 
-def _write(outs, values, V, C, args, sources=None, kind="distance", title="", names=None):
+def _write(outs, values, V, C, args, sources=None, kind="auto", title="", names=None):
     """Write ``values`` (one row per vertex) to each output, by extension.
 
     ``names`` name the columns: the CSV header, and the point-data arrays of a
@@ -317,7 +338,8 @@ def _write(outs, values, V, C, args, sources=None, kind="distance", title="", na
             from .viz import plot_levelsets
 
             f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
-            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
+            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path,
+                           camera=getattr(args, "view", "auto"), cmap=getattr(args, "cmap", None))
         elif ext in _FIELD_MESHES:
             cols = [values] if values.ndim == 1 else [values[:, j] for j in range(values.shape[1])]
             write_mesh(path, V, C, fields=dict(zip(names, cols)))
@@ -352,7 +374,7 @@ def _job_kernel_distance(args):
                   order=args.order, diagonal=args.diagonal)
     prog.update()
     prog.set_postfix_str("writing")
-    kind = "distance" if args.job == "distance" else "cyclic"
+    kind = color_meaning(args.job, args.filter)
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
            title=f"{ev.label} ({name})", names=[f"{args.filter}_{args.job}"])
     prog.update()
@@ -375,7 +397,7 @@ def _job_hks(args):
     H = np.asarray(hks(lap, np.asarray(times, dtype=float), method=args.diagonal,
                        engine_method=args.method, tol=args.tol), dtype=float).reshape(lap.n, len(times))
     seconds = time.perf_counter() - start
-    _write(args.out, H, V, C, args, kind="cyclic", title=f"HKS t={times[len(times) // 2]:.3g} ({name})",
+    _write(args.out, H, V, C, args, kind="sequential", title=f"HKS t={times[len(times) // 2]:.3g} ({name})",
            names=[f"t={t:.4g}" for t in times])
     _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
@@ -445,7 +467,7 @@ def _job_smooth(args):
             _write([o], np.linalg.norm(g - V, axis=1), g, C, args, kind="distance",
                    title=f"smoothed, t={t:.3g} (colour: displacement)")
     else:
-        _write(args.out, g, V, C, args, kind="cyclic", title=f"smoothed, t={t:.3g}",
+        _write(args.out, g, V, C, args, kind="auto", title=f"smoothed, t={t:.3g}",
                names=["smoothed"] if g.ndim == 1 else [f"smoothed{j}" for j in range(g.shape[1])])
     _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
@@ -472,7 +494,11 @@ def _job_geodesic(args):
 
 def _job_view(args):
     from .viz import Viewer
+    from .viz import display_available
 
+    if args.screenshot is None and not display_available():  # before any work
+        raise CLIError("no display available for the interactive viewer: use "
+                       "--screenshot FILE.png to render off screen", EXIT_USAGE)
     V, C, name = _load_shape(args)
     if args.source >= len(V):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
@@ -482,18 +508,13 @@ def _job_view(args):
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
                     source=args.source, tol=args.tol, off_screen=True if off else None,
-                    diagonal=args.diagonal)
+                    diagonal=args.diagonal, camera=args.view, cmap=args.cmap)
     if off:
         Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
         return EXIT_OK
-    from .viz import headless
-
-    if headless():
-        raise CLIError("no display available: use --screenshot FILE.png to render off screen",
-                       EXIT_USAGE)
     viewer.show()
     return EXIT_OK
 

@@ -71,10 +71,37 @@ def test_fig02_harmonic(tmp_path):
 def test_fig03_eigenfunctions(tmp_path):
     r = run("fig03_eigenfunctions", tmp_path)
     assert all(e == 2 for e in r["euler_characteristic"])
+    # the first non-constant eigenfunction of this genus-0 blob: one minimum, one maximum
+    assert r["critical_counts"][0] == (1, 1, 0)
+    # cancelling low-persistence pairs only removes points, and keeps m - s + M
+    for (m, M, s), (m0, M0, s0) in zip(r["critical_counts"], r["raw_critical_counts"]):
+        assert m <= m0 and M <= M0 and s <= s0 and m0 - s0 + M0 == 2
     assert 0 < r["eigenvalues"][0] and np.all(np.diff(r["eigenvalues"]) > 0)
     # higher eigenfunctions oscillate more: more critical points
     totals = [sum(c) for c in r["critical_counts"]]
     assert totals[-1] > totals[0]
+
+
+def test_persistent_critical_points_cancel_a_spurious_pair():
+    """z on a sphere plus a dent: the dent is a minimum and a saddle of tiny persistence."""
+    from data_generators import icosphere
+
+    load("fig02_harmonic")  # puts examples/ on the path
+    import _common as C
+
+    V, F = icosphere(3)
+    f = V[:, 2].copy()
+    k = int(np.argmin(np.abs(V[:, 2]) + np.abs(V[:, 0] - 1.0)))  # a vertex on the equator
+    nbrs = np.unique(F[np.any(F == k, axis=1)])
+    f[k] = f[nbrs[nbrs != k]].min() - 1e-3  # below all its neighbours: a local minimum
+    cp = C.persistent_critical_points(V, F, f, fraction=0.02)
+    m0, M0, s0 = cp["raw"]
+    assert m0 == 2 and M0 == 1 and s0 == 1  # the dent adds a minimum and a saddle
+    assert (cp["n_minima"], cp["n_maxima"], cp["n_saddles"]) == (1, 1, 0)
+    assert cp["minimum"].tolist() == [int(np.argmin(V[:, 2]))]  # the south pole remains
+    # with no threshold nothing is cancelled
+    cp0 = C.persistent_critical_points(V, F, f, fraction=0.0)
+    assert (cp0["n_minima"], cp0["n_maxima"], cp0["n_saddles"]) == (2, 1, 1)
 
 
 def test_fig04_anisotropic_heat(tmp_path):
