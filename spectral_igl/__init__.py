@@ -61,3 +61,8 @@ __all__ += [
     "schrodinger",
 ]
 # --- end applications ---
+
+# --- collection ---
+from . import collection  # noqa: E402  (dask and zarr are imported only when it runs)
+
+__all__ += ["collection"]

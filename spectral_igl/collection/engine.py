@@ -22,7 +22,7 @@ from .jobs import Job
 from .store import check_name, clean_partial, open_root, read_record, write_record
 
 __all__ = ["run", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
-           "inspect_shape"]
+           "inspect_shape", "input_hash"]
 
 #: file types read by :func:`spectral_igl.io.read_mesh` (a directory input means these)
 MESH_TYPES = (".obj", ".off", ".ply", ".stl", ".wrl", ".mesh")
@@ -124,6 +124,9 @@ def collect_inputs(inputs) -> list:
             found = _paths(item)
             if not found:
                 raise ValueError(f"inputs: the pattern {os.fspath(item)!r} matches no file")
+            missing = [p for p in found if not os.path.isfile(p)]
+            if missing:
+                raise ValueError(f"inputs: no such file {missing[0]!r}")
             shapes += [Shape(check_name(Path(p).stem), p) for p in found]
         elif isinstance(item, (tuple, list)) and len(item) == 3:
             shapes.append(_array_shape(item[0], (item[1], item[2])))
@@ -209,23 +212,30 @@ def estimate_memory(n: int, nnz: int, domain: str = "triangle", job: Job | None 
     return int(BASE_BYTES + 130 * nnz * math.log2(n))
 
 
-def inspect_shape(shape: Shape) -> dict:
-    """Hash and size of one input, before any work: ``input_hash``, ``n``, ``nnz``, ``domain``.
+def _transient(err) -> bool:
+    """Failures worth retrying on a rerun (memory, I/O) rather than a property of the input."""
+    return isinstance(err, (MemoryError, OSError))
 
-    The input hash is the SHA-256 of the file's bytes (of the arrays for array inputs).
-    An unreadable input gives ``error`` instead of the sizes.
+
+def input_hash(shape: Shape) -> str:
+    """SHA-256 of the input file's bytes (of the arrays for array inputs)."""
+    return _file_digest(shape.path) if shape.path is not None else _digest(shape.V, shape.C)
+
+
+def inspect_shape(shape: Shape) -> dict:
+    """Size of one input before any work: ``n``, ``nnz`` (of L), ``domain``.
+
+    An unreadable input gives ``error`` (its text) instead of the sizes.
     """
     info = {"name": shape.name}
     try:
-        info["input_hash"] = _file_digest(shape.path) if shape.path is not None else \
-            _digest(shape.V, shape.C)
         V, C = _read(shape)
         n = len(V)
         domain = "points" if C is None else ("tet" if np.asarray(C).shape[1] == 4 else "triangle")
         info.update(n=n, nnz=_nnz(n, C), domain=domain)
     except Exception as err:  # noqa: BLE001 - reported as this shape's failure
         info["error"] = f"{type(err).__name__}: {err}"
-        info.setdefault("input_hash", None)
+        info["transient"] = _transient(err)
     return info
 
 
@@ -252,6 +262,8 @@ def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
                   host=socket.gethostname(), pid=os.getpid())
     lap = None
     try:
+        if shape.path is not None:    # the bytes actually read here
+            record["input_hash"] = input_hash(shape)
         V, C = _read(shape)
         record["mesh_hash"] = _digest(np.asarray(V, dtype=float),
                                       None if C is None else np.asarray(C, dtype=np.int64))
@@ -268,7 +280,7 @@ def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
     except Exception as err:  # noqa: BLE001 - the shape's failure is recorded, others go on
         arrays = {}
         record.update(status="failed", error=f"{type(err).__name__}: {err}",
-                      traceback=traceback.format_exc(limit=8))
+                      transient=_transient(err), traceback=traceback.format_exc(limit=8))
     finally:
         if lap is not None:      # the factorizations of this shape are not kept
             lap.cache.clear()
@@ -324,7 +336,7 @@ def _worker_limits(client):
 
 def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progress: bool = True,
         retries: int = 2, memory_limit="auto", weights: str = "cotan", mass: str = "full",
-        force: bool = False) -> RunSummary:
+        force: bool = False, retry_failed: bool = False) -> RunSummary:
     r"""Run ``job`` on every shape of ``inputs`` on dask.distributed; results in a Zarr store.
 
     Parameters
@@ -357,12 +369,17 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     weights, mass : Laplacian options of :func:`spectral_igl.laplacian` (meshes).
     force : bool
         Recompute shapes whose stored result is current.
+    retry_failed : bool
+        Rerun shapes whose recorded failure came from the input itself (a corrupt file, an
+        invalid mesh, an exception of the job) although input and job are unchanged.
+        Failures from memory, I/O or a dying worker are always retried.
 
     Returns
     -------
     RunSummary
         Names done, skipped (result already in the store for the same input hash and
-        job), and failed (with the error text, also stored).
+        job), and failed (with the error text, also stored; a failure recorded by an
+        earlier run for the same input and job is reported again, not recomputed).
 
     Notes
     -----
@@ -387,35 +404,44 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     summary = RunSummary(out=out)
     silence = logging.ERROR if not progress else logging.WARNING
 
+    # 1. skip current results (hashes computed here: the inputs must be readable by the client)
+    pending = []
+    for s in shapes:
+        h = input_hash(s)
+        meta = {"job": job.kind, "params": job.params, "laplacian": options, "job_key": key,
+                "input_hash": h}
+        prev = read_record(out, s.name)
+        current = (not force and prev is not None and prev.get("input_hash") == h
+                   and prev.get("job_key") == key)
+        if current and prev["status"] == "done":
+            summary.skipped.append(s.name)
+        elif current and not retry_failed and not prev.get("transient", True):
+            summary.failed[s.name] = prev.get("error", "failed") + " (recorded earlier; not retried)"
+        else:
+            pending.append((s, meta))
+    if not pending:
+        summary.seconds = time.perf_counter() - t_start
+        return summary
+
     from distributed import progress as dask_progress
     from distributed import wait
 
     client, cluster, owned = _connect(scheduler, workers, memory_limit, silence)
     try:
         summary.workers, limit, nthreads, mem_res = _worker_limits(client)
-        # 1. hash and size every input (files on the workers, arrays here)
-        files = [s for s in shapes if s.path is not None]
+        # 2. size every remaining input (files on the workers, arrays here); record unreadable ones
+        files = [s for s, _ in pending if s.path is not None]
         futs = client.map(inspect_shape, files, pure=False, retries=retries,
                           key=[f"inspect-{s.name}-{os.urandom(4).hex()}" for s in files])
         infos = {s.name: i for s, i in zip(files, client.gather(futs))}
-        for s in shapes:
-            if s.path is None:
-                infos[s.name] = inspect_shape(s)
-        # 2. skip current results; record unreadable inputs
         todo = []
-        for s in shapes:
-            info = infos[s.name]
-            meta = {"job": job.kind, "params": job.params, "laplacian": options, "job_key": key,
-                    "input_hash": info.get("input_hash")}
+        for s, meta in pending:
+            info = infos[s.name] if s.path is not None else inspect_shape(s)
             if "error" in info:
                 write_record(out, s.name, dict(meta, name=s.name, source=s.source, status="failed",
-                                               error=info["error"], version=__version__))
+                                               error=info["error"], transient=info["transient"],
+                                               version=__version__))
                 summary.failed[s.name] = info["error"]
-                continue
-            prev = read_record(out, s.name)
-            if (not force and prev is not None and prev.get("status") == "done"
-                    and prev.get("input_hash") == info["input_hash"] and prev.get("job_key") == key):
-                summary.skipped.append(s.name)
                 continue
             est = estimate_memory(info["n"], info["nnz"], info["domain"], job)
             meta["memory_estimate_bytes"] = est
@@ -453,7 +479,8 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
                     summary.failed[s.name] = err
                     try:
                         write_record(out, s.name, dict(meta, name=s.name, source=s.source,
-                                                       status="failed", error=err, version=__version__))
+                                                       status="failed", error=err, transient=True,
+                                                       version=__version__))
                     except OSError:
                         pass
 

@@ -33,7 +33,8 @@ def _zarr():
     try:
         import zarr
     except ImportError as err:  # pragma: no cover - a dependency
-        raise ImportError("spectral_igl.collection needs zarr: pip install 'zarr>=3,<4'") from err
+        raise ImportError("spectral_igl.collection needs zarr 3 (Python >= 3.11): "
+                          "pip install 'zarr>=3,<4'") from err
     if int(zarr.__version__.split(".")[0]) < 3:
         raise ImportError(f"spectral_igl.collection needs zarr >= 3, found {zarr.__version__}")
     return zarr
