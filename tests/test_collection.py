@@ -328,3 +328,19 @@ def test_bad_arguments(tmp_path):
     b = collection.estimate_memory(100_000, 700_000, "triangle")
     c = collection.estimate_memory(10_000, 150_000, "tet")
     assert a < b and 10 * (a - collection.engine.BASE_BYTES) < b - collection.engine.BASE_BYTES and c > a
+
+
+def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
+    from spectral_igl.collection import engine
+
+    shapes = _shapes()
+    big = shapes["torus"][0].shape[0]
+    real = engine.estimate_memory
+    monkeypatch.setattr(engine, "estimate_memory",
+                        lambda n, nnz, domain="triangle", job=None: 10 ** 15 if n == big else real(n, nnz, domain, job))
+    s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
+    assert sorted(s.done) == sorted(shapes)
+    res = collection.load(tmp_path / "big.zarr").results
+    assert res["torus"].meta.get("run_alone") is True and "run_alone" not in res["sphere"].meta
+    assert res["torus"].meta["memory_estimate_bytes"] == 10 ** 15
+    assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))

@@ -239,6 +239,18 @@ def inspect_shape(shape: Shape) -> dict:
     return info
 
 
+def _peak_rss() -> int:
+    """Peak resident memory of this worker process so far, in bytes."""
+    try:  # Linux: the high-water mark of this address space
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
 def _laplacian(V, C, options):
     if C is None:
         from ..laplacian import point_cloud_laplacian
@@ -287,7 +299,7 @@ def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
         del lap
     timings["total"] = time.perf_counter() - t0
     record["timings"] = timings
-    record["worker_peak_rss_bytes"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    record["worker_peak_rss_bytes"] = _peak_rss()
     record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     write_record(out, shape.name, record, arrays)
     return {"name": shape.name, "status": record["status"], "error": record.get("error"),
