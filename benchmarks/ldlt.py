@@ -19,8 +19,8 @@ import scipy.sparse.linalg as spla
 
 import spectral_igl as sig
 from data_generators import box_tets, torus
-from spectral_igl._factor import factorize
-from spectral_igl._selinv import LDLT, Pattern
+from spectral_igl.linalg import factorize
+from spectral_igl.linalg.ldlt import LDLT, Pattern
 
 
 def unit_torus(n):

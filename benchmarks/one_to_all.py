@@ -21,7 +21,7 @@ import numpy as np
 import spectral_igl as sig
 from data_generators import icosphere, torus
 from spectral_igl import filters
-from spectral_igl._factor import factorize
+from spectral_igl.linalg import factorize
 
 
 def main():
@@ -65,7 +65,7 @@ def main():
     print(f"one Cholesky of B + tL: {chol:.3f} s", flush=True)
 
     t0 = time.perf_counter()
-    sig.solvers.ldlt_pattern(lap)
+    sig.linalg.ldlt_pattern(lap)
     print(f"ordering + symbolic analysis of the pattern (once per mesh): {time.perf_counter() - t0:.3f} s", flush=True)
 
     eig = {}
@@ -90,7 +90,7 @@ def main():
         for key in ("kernel_diagonal_eigs", "grounded_ldlt", "inverse_mass_diagonal", "factors"):
             for k in [k for k in lap.cache if k == key or (isinstance(k, tuple) and k[:1] == (key,))]:
                 del lap.cache[k]
-        sig.solvers.clear_cache(lap)
+        sig.linalg.clear_cache(lap)
         t0 = time.perf_counter()
         if kind == "dist":
             val, info = sig.spectral_distance(lap, filt, src, diagonal=args.diagonal, max_colours=args.max_colours,

@@ -19,7 +19,13 @@ __all__ = [
     "as_positive",
     "as_nonnegative",
     "describe",
+    "as_array",
+    "as_delta",
+    "DELTAS",
 ]
+
+#: the discrete deltas of a kernel column: B^-1 e_i (converges) or e_i (the survey's Eq. (5))
+DELTAS = ("mass", "seed")
 
 
 def describe(x) -> str:
@@ -33,7 +39,7 @@ def describe(x) -> str:
     return f"{type(x).__name__} {x!r}"[:200]
 
 
-def _to_array(x, name: str) -> np.ndarray:
+def as_array(x, name: str) -> np.ndarray:
     if x is None:
         raise TypeError(f"{name} must be an array, got None")
     if isinstance(x, (str, bytes, dict, set)):
@@ -54,7 +60,7 @@ def as_points(V, name: str = "V", dims=(2, 3), min_rows: int = 1) -> np.ndarray:
 
     ``dims`` lists the admissible numbers of columns.
     """
-    a = _to_array(V, name)
+    a = as_array(V, name)
     if a.dtype.kind not in "biuf":
         raise TypeError(f"{name} must hold real numbers, got {describe(a)}")
     if a.ndim != 2 or a.shape[1] not in tuple(dims):
@@ -75,7 +81,7 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
     Returns int64, C-contiguous. Rejects floats that are not whole numbers,
     negative and out-of-range indices, and empty arrays.
     """
-    a = _to_array(F, name)
+    a = as_array(F, name)
     if a.ndim != 2 or a.shape[1] not in tuple(sizes):
         want = " or ".join(f"(m, {k})" for k in sizes)
         raise ValueError(f"{name} must have shape {want}, got {describe(a)}")
@@ -97,7 +103,7 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
 
 def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndarray:
     """Validate a signal of shape ``(n,)`` or ``(n, k)``; return float64 or complex128."""
-    a = _to_array(f, name)
+    a = as_array(f, name)
     if a.dtype.kind == "c" and not allow_complex:
         raise TypeError(f"{name} must be real, got {describe(a)}")
     if a.dtype.kind not in "biufc":
@@ -125,7 +131,7 @@ def as_index(i, n: int, name: str = "source") -> int:
 
 def as_indices(idx, n: int, name: str = "sources", allow_empty: bool = False) -> np.ndarray:
     """Validate a 1-D array of vertex indices in ``[0, n)``; scalars become length 1."""
-    a = _to_array(idx, name)
+    a = as_array(idx, name)
     if a.ndim == 0:
         a = a.reshape(1)
     if a.ndim != 1:
@@ -173,3 +179,10 @@ def as_nonnegative(x, name: str) -> float:
     if x < 0:
         raise ValueError(f"{name} must be non-negative, got {x}")
     return x
+
+
+def as_delta(delta) -> str:
+    """Validate the ``delta`` argument of kernels and distances (one of :data:`DELTAS`)."""
+    if not isinstance(delta, str) or delta not in DELTAS:
+        raise ValueError(f"delta must be 'mass' (B^-1 e_i, converges) or 'seed' (e_i), got {describe(delta)}")
+    return delta

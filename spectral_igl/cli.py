@@ -22,13 +22,22 @@ from pathlib import Path
 
 import numpy as np
 
+from ._version import __version__
+from .applications import diffusion_smooth, geodesic_distance, optimal_time
+from .approx import METHODS
+from .descriptors import hks
+from .diagonal import METHODS as DIAGONAL_METHODS
+from .filters import FILTERS
+from .io import read_mesh, write_mesh
+from .laplacian import laplacian
+from .quantity import evaluate
+
 __all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
 
-_FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "commute_time", "biharmonic", "polyharmonic")
-_METHODS = ("auto", "rational", "krylov", "chebyshev", "taylor", "euler", "power", "taylor1",
-            "contour", "eigen", "dense")
+_FILTERS = tuple(FILTERS)
+_METHODS = METHODS
 _OUTPUTS = (".npy", ".csv", ".png")
 _SHAPES = ("sphere", "box", "torus", "cylinder")
 
@@ -127,7 +136,7 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+    p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
                    help="distances: how the kernel diagonal is obtained (selinv: selected "
                         "inversion, certified; exact: one application per vertex; probing: "
                         "colouring estimator; default auto: selinv where it applies)")
@@ -135,8 +144,6 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
 
 def build_parser():
     """The ``argparse`` parser of ``spectral-igl``."""
-    from . import __version__
-
     parser = argparse.ArgumentParser(
         prog="spectral-igl",
         description="Laplacian spectral kernels and distances on 3-D shapes, spectrum-free "
@@ -175,7 +182,7 @@ def build_parser():
                    help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
-    p.add_argument("--diagonal", default="auto", choices=("auto", "selinv", "exact", "probing", "dense"),
+    p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
                    help="how the diagonal K_t(i, i) is obtained: selinv (selected inversion, "
                         "certified), exact (one application per vertex), probing (colouring "
                         "estimator), dense; default auto (selinv)")
@@ -239,7 +246,6 @@ def _load_shape(args):
     if args.mesh is None and not getattr(args, "shape", None):
         raise CLIError("no input: give a MESH file or --shape sphere", EXIT_USAGE)
     if args.mesh is not None:
-        from .io import read_mesh
 
         try:
             V, C = read_mesh(args.mesh)
@@ -277,8 +283,6 @@ def _check_outputs(outs, allowed):
 
 
 def _laplacian(V, C, args):
-    from . import laplacian
-
     try:
         return laplacian(V, C, weights=args.weights, mass=args.mass)
     except ValueError as err:
@@ -311,7 +315,6 @@ def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
             f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
             plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
         else:
-            from .io import write_mesh
 
             write_mesh(path, values, C)
 
@@ -323,8 +326,6 @@ def _say(args, text):
 
 # ---- jobs ---------------------------------------------------------------------------------
 def _job_kernel_distance(args):
-    from .viz._quantity import FILTERS, evaluate
-
     _check_outputs(args.out, _OUTPUTS)
     prog = Progress(4, args.job, enabled=(not args.quiet) and (args.progress or None))
     V, C, name = _load_shape(args)
@@ -335,7 +336,7 @@ def _job_kernel_distance(args):
     lap = _laplacian(V, C, args)
     prog.step("Laplacian")
     t = args.time
-    if FILTERS[args.filter] and t is None:
+    if FILTERS[args.filter][1] and t is None:
         t = _default_time(lap)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
@@ -358,8 +359,6 @@ def _job_hks(args):
     times = args.times
     if times is None:
         times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
-    from . import hks
-
     prog = Progress(len(times), "hks", enabled=(not args.quiet) and (args.progress or None))
     cols = []
     start = time.perf_counter()
@@ -409,8 +408,6 @@ def _job_smooth(args):
     if geometry:  # smoothing the shape itself: the operator is that of the (noisy) shape
         V = f.copy()
     lap = _laplacian(V, C, args)
-    from . import diffusion_smooth
-
     t = args.time
     if t is None and geometry:
         # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
@@ -419,8 +416,6 @@ def _job_smooth(args):
             C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
         t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
     elif t is None:  # the L-curve corner, per column for several columns (their median)
-        from . import optimal_time
-
         cols = f.reshape(lap.n, -1).T
         t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
@@ -449,8 +444,6 @@ def _job_geodesic(args):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
                        EXIT_USAGE)
     lap = _laplacian(V, C, args)
-    from . import geodesic_distance
-
     start = time.perf_counter()
     d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
     seconds = time.perf_counter() - start
@@ -464,7 +457,6 @@ def _job_geodesic(args):
 
 def _job_view(args):
     from .viz import Viewer
-    from .viz._quantity import FILTERS
 
     V, C, name = _load_shape(args)
     if args.source >= len(V):
@@ -482,7 +474,7 @@ def _job_view(args):
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
         return EXIT_OK
-    from .viz._backend import headless
+    from .viz import headless
 
     if headless():
         raise CLIError("no display available: use --screenshot FILE.png to render off screen",
@@ -606,10 +598,9 @@ def _batch_job(args):
         return Job.eigenvalues(args.k or 20)
     filt = args.filter or ("heat" if kind == "diagonal" else "biharmonic")
     order = args.order if filt == "polyharmonic" else None
-    from .collection import FILTERS
-
-    t = args.time if FILTERS[filt] else None
-    if FILTERS[filt] and t is None:
+    timed = FILTERS[filt][1]
+    t = args.time if timed else None
+    if timed and t is None:
         raise CLIError(f"filter {filt} needs a time: give -t", EXIT_USAGE)
     if kind == "diagonal":
         return Job.kernel_diagonal(filt, t=t, order=order, method=args.method, tol=args.tol)

@@ -3,10 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._diagonal import kernel_diagonal
 from ._validate import as_positive, describe
-from .kernels import _check_filter, _check_lap, _filters, abs_square, filter_at_zero
-from .laplacian import dense_eigs, eigs
+from .diagonal import kernel_diagonal
+from .filters import Filter, check_filter, heat
+from .laplacian import as_laplacian
+from .linalg import cached_eigs
 
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
 
@@ -38,8 +39,8 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     -------
     (n,) float
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
     return kernel_diagonal(lap, filt, method=method, **kwargs)
 
 
@@ -52,23 +53,21 @@ def hks(lap, times, method: str = "auto", **kwargs):
     -------
     (n,) float for a scalar time, (n, len(times)) float for an array of times.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     T = _values(times, "times")
-    cols = [kernel_diagonal(lap, _filters().heat(as_positive(t, "time")), method=method, **kwargs)
+    cols = [kernel_diagonal(lap, heat(as_positive(t, "time")), method=method, **kwargs)
             for t in T.reshape(-1)]
     return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
 
 
 def _wks_filter(e, sigma):
-    F = _filters().Filter
-
     def psi(s, e=e, sigma=sigma):
         s = np.asarray(s, dtype=float)
         with np.errstate(divide="ignore"):
             ls = np.log(np.where(s > 0, s, np.finfo(float).tiny))
         return np.where(s > 0, np.exp(-((e - ls) ** 2) / (2.0 * sigma ** 2)), 0.0)
 
-    return F(psi, name=f"wks({e:g},{sigma:g})", singular=False)
+    return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=False, key=("wks", e, sigma))
 
 
 def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen", **kwargs):
@@ -97,7 +96,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
     -------
     (n,) float for a scalar energy, (n, E) float for an array.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     E = _values(energies, "energies")
     Ev = E.reshape(-1)
     if sigma is None:
@@ -108,7 +107,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
     if method == "eigen":
         c = lap.n_components
         kk = c + int(k)
-        lam, X = eigs(lap, kk) if kk < lap.n else dense_eigs(lap)
+        lam, X = cached_eigs(lap, kk if kk < lap.n else None)
         lam, X = lam[c:], X[:, c:]
         Psi = np.exp(-((Ev[None, :] - np.log(lam)[:, None]) ** 2) / (2.0 * sigma ** 2))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
@@ -132,10 +131,10 @@ def auto_diffusion_function(lap, t, method: str = "auto", **kwargs):
     ADF is invariant under a uniform scaling of the shape and equals 1 at large t on a
     connected shape. Returns (n,) float, or (n, len(t)) for an array of times.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     T = _values(t, "t")
     c = lap.n_components
-    lam2 = float(eigs(lap, c + 1)[0][c])
+    lam2 = float(cached_eigs(lap, c + 1)[0][c])
     out = hks(lap, T / lam2, method=method, **kwargs) * lap.area()
     return out
 
@@ -156,14 +155,14 @@ def eccentricity(lap, filt, method: str = "auto", **kwargs):
     -------
     (n,) float
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
-    G2 = abs_square(filt)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
+    G2 = filt.square
     diag = np.real(kernel_diagonal(lap, G2, method=method, **kwargs))
     m = lap.mass
     lab = lap.components
     Ac = np.bincount(lab, weights=m)
     Tc = np.bincount(lab, weights=m * diag)
-    phi0 = abs(filter_at_zero(filt)) ** 2
+    phi0 = abs(filt.at_zero()) ** 2
     e2 = diag + Tc[lab] / Ac[lab] - 2.0 * phi0 / Ac[lab]
     return np.sqrt(np.maximum(e2, 0.0))

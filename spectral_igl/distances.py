@@ -15,19 +15,24 @@ import warnings
 
 import numpy as np
 
-from ._diagonal import EXACT_MAX, _selinv_kernel, kernel_diagonal
-from ._validate import as_index, as_indices, as_positive
-from .kernels import (
-    _check_delta,
-    _check_filter,
-    _check_lap,
-    _filters,
-    _operator,
-    abs_square,
+from ._validate import as_delta, as_index, as_indices, as_positive
+from .approx import spectral_operator
+from .diagonal import EXACT_MAX, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .filters import (
+    biharmonic,
+    check_filter,
+    commute_time,
+    heat,
+    mexican_hat,
+    polyharmonic,
+    wave,
 )
+from .kernels import kernel_columns
+from .laplacian import as_laplacian
 
 __all__ = [
     "spectral_distance",
+    "OneToAll",
     "pairwise_spectral_distance",
     "diffusion_distance",
     "commute_time_distance",
@@ -115,9 +120,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     >>> d.shape, float(d[0])
     ((162,), 0.0)
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
-    delta = _check_delta(delta)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
+    delta = as_delta(delta)
     n = lap.n
     s = as_index(source, n, "source")
     info = {}
@@ -130,12 +135,12 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     if targets is not None:
         t = as_indices(targets, n, "targets")
         if not (t.size > MANY_TARGETS and n > EXACT_MAX):
-            op = _operator(lap, filt, method, tol)
+            op = spectral_operator(lap, filt, method, tol)
             d = np.sqrt(_pair_norms(lap, op, s, t, delta))
             return _finish(d[0] if scalar else d, info, return_info)
 
     # one-to-all: column of G, diagonal of G
-    G2 = abs_square(filt)
+    G2 = filt.square
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
                                   engine_method=method, return_info=True)
@@ -146,7 +151,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     if dinfo["method"] == "selinv":
         # the column from the same approximation R as the diagonal: d^2 is then R's own
         # squared distance, |d^2 - d_R^2| <= eps ||B^-1(e_i - e_s)||_B^2 <= 2 (bound_i + bound_s)
-        kern = _selinv_kernel(lap, G2, tol)
+        kern = selinv_kernel(lap, G2, tol)
         bound = kern.diagonal()[1]
         if delta == "mass":
             col = kern.columns(e)[:, 0]
@@ -155,9 +160,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
             bound = bound * lap.mass ** 2
         err = 2.0 * (bound + bound[s])
     else:
-        op2 = _operator(lap, G2, method, tol)
+        op2 = spectral_operator(lap, G2, method, tol)
         col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
-        col_bound = np.atleast_1d(np.asarray(getattr(op2, "error_bound", None), dtype=float))
+        col_bound = np.atleast_1d(np.asarray(op2.error_bound, dtype=float))
         col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
         # error of each d^2 entry: the diagonal's (bound or measured sample error), the
         # column's certified bound, and rounding of the cancellation
@@ -186,7 +191,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
                       "are recomputed exactly; a more accurate diagonal (method='exact') is cheaper",
                       RuntimeWarning, stacklevel=2)
     if redo.size:
-        op = _operator(lap, filt, method, tol)
+        op = spectral_operator(lap, filt, method, tol)
         d2[redo] = _pair_norms(lap, op, s, redo, delta)
     info["recomputed"] = redo
     # |d^2 - d~^2| <= thr for every entry not recomputed (certified when the diagonal is
@@ -211,11 +216,9 @@ def _select(d, targets, n):
 
 def _eigen_distance(lap, filt, s, k, delta):
     """Truncated-eigenpair distance from s to all vertices (the classical baseline)."""
-    from ._diagonal import _low_rank, _phi_values
-
     k = 100 if k is None else int(k)
-    lam, W = _low_rank(lap, max(1, min(k, lap.n)), delta)
-    w = np.abs(_phi_values(filt, lam, lap.n_components)) ** 2
+    lam, W = low_rank(lap, max(1, min(k, lap.n)), delta)
+    w = np.abs(phi_values(filt, lam, lap.n_components)) ** 2
     d2 = ((W - W[s]) ** 2) @ w
     return np.sqrt(np.maximum(d2, 0.0))
 
@@ -234,12 +237,10 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     -------
     D : (m, m) float, symmetric, zero diagonal.
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
-    delta = _check_delta(delta)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
+    delta = as_delta(delta)
     S = as_indices(seeds, lap.n, "seeds")
-    from .kernels import kernel_columns
-
     C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
@@ -266,7 +267,7 @@ def diffusion_distance(lap, t, source, targets=None, **kwargs):
     :func:`spectral_distance`.
     """
     t = as_positive(t, "t")
-    return spectral_distance(lap, _filters().heat(t / 2.0), source, targets, **kwargs)
+    return spectral_distance(lap, heat(t / 2.0), source, targets, **kwargs)
 
 
 def commute_time_distance(lap, source, targets=None, **kwargs):
@@ -277,7 +278,7 @@ def commute_time_distance(lap, source, targets=None, **kwargs):
     On surfaces it diverges logarithmically under refinement (the Green's function is
     singular at the diagonal); it is scale invariant in 2-D.
     """
-    return spectral_distance(lap, _filters().commute_time(), source, targets, **kwargs)
+    return spectral_distance(lap, commute_time(), source, targets, **kwargs)
 
 
 def biharmonic_distance(lap, source, targets=None, **kwargs):
@@ -285,7 +286,7 @@ def biharmonic_distance(lap, source, targets=None, **kwargs):
 
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-2} |x_l(i) - x_l(j)|^2
     """
-    return spectral_distance(lap, _filters().biharmonic(), source, targets, **kwargs)
+    return spectral_distance(lap, biharmonic(), source, targets, **kwargs)
 
 
 def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
@@ -293,7 +294,7 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
 
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
     """
-    return spectral_distance(lap, _filters().polyharmonic(k), source, targets, **kwargs)
+    return spectral_distance(lap, polyharmonic(k), source, targets, **kwargs)
 
 
 def wave_distance(lap, t, source, targets=None, **kwargs):
@@ -306,7 +307,7 @@ def wave_distance(lap, t, source, targets=None, **kwargs):
     (and grows under refinement). Provided for completeness of the survey's family.
     """
     t = as_positive(t, "t")
-    return spectral_distance(lap, _filters().wave(t), source, targets, **kwargs)
+    return spectral_distance(lap, wave(t), source, targets, **kwargs)
 
 
 def mexican_hat_distance(lap, t, source, targets=None, **kwargs):
@@ -315,4 +316,58 @@ def mexican_hat_distance(lap, t, source, targets=None, **kwargs):
     .. math:: d^2(i, j) = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(i) - x_l(j)|^2
     """
     t = as_positive(t, "t")
-    return spectral_distance(lap, _filters().mexican_hat(t), source, targets, **kwargs)
+    return spectral_distance(lap, mexican_hat(t), source, targets, **kwargs)
+
+
+class OneToAll:
+    r"""One-to-all spectral distances of one filter on one shape, precomputed once.
+
+    The kernel diagonal :math:`G_{jj}` (and, for ``diagonal="selinv"``, the factorizations
+    of its partial fractions) is computed when the object is made; each :meth:`distance`
+    then costs about one kernel column. The one-call functions (:func:`spectral_distance`,
+    :func:`diffusion_distance`, ...) share the same cache on the Laplacian, so a second
+    source through them costs the same; this object makes the precomputation explicit.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    filt : Filter
+        :math:`\varphi` (the distance uses :math:`|\varphi|^2`).
+    **options
+        ``delta``, ``method``, ``tol``, ``diagonal`` and the diagonal estimator's
+        parameters, as in :func:`spectral_distance`.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> solver = sig.OneToAll(lap, sig.filters.biharmonic())
+    >>> d0, d5 = solver.distance(0), solver.distance(5)
+    >>> bool(abs(d0[5] - d5[0]) < 1e-8)
+    True
+    """
+
+    def __init__(self, lap, filt, **options):
+        self.lap = as_laplacian(lap)
+        self.filter = check_filter(filt)
+        if "targets" in options or "return_info" in options:
+            raise TypeError("OneToAll takes targets and return_info in distance(), not here")
+        self.options = options
+        keys = ("method", "delta", "k", "distance", "samples", "rtol", "max_colours", "tol")
+        diag_opts = {("engine_method" if k == "method" else k): v for k, v in options.items() if k in keys}
+        diag_opts["method"] = options.get("diagonal", "auto")
+        if diag_opts["method"] != "eigen":
+            self.diagonal, self.info = kernel_diagonal(self.lap, self.filter.square, return_info=True,
+                                                       **diag_opts)
+        else:
+            self.diagonal, self.info = None, {"method": "eigen"}
+
+    def distance(self, source, targets=None, return_info: bool = False):
+        """Distances from ``source`` to ``targets`` (all vertices by default); see
+        :func:`spectral_distance`."""
+        return spectral_distance(self.lap, self.filter, source, targets, return_info=return_info,
+                                 **self.options)
+
+    def __repr__(self) -> str:
+        return f"OneToAll({self.filter!r}, n={self.lap.n}, diagonal={self.info.get('method')!r})"

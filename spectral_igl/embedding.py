@@ -3,11 +3,10 @@ from __future__ import annotations
 
 import numbers
 
-import numpy as np
-
-from ._diagonal import _phi_values
-from .kernels import _check_filter, _check_lap
-from .laplacian import dense_eigs, eigs
+from .diagonal import phi_values
+from .filters import check_filter
+from .laplacian import as_laplacian
+from .linalg import dense_eigs, eigs
 
 __all__ = ["spectral_embedding"]
 
@@ -36,13 +35,13 @@ def spectral_embedding(lap, filt, k: int):
     -------
     (n, k) float (complex for a complex filter)
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
     if isinstance(k, bool) or not isinstance(k, numbers.Integral):
         raise TypeError(f"k must be an integer, got {type(k).__name__}")
     c, n = lap.n_components, lap.n
     if not 1 <= k <= n - c:
         raise ValueError(f"k must be in [1, {n - c}], got {k}")
     lam, X = eigs(lap, c + k) if c + k < n else dense_eigs(lap)
-    ph = _phi_values(filt, lam, c)
+    ph = phi_values(filt, lam, c)
     return (X * ph[None, :])[:, c:c + k]

@@ -26,7 +26,7 @@ import numpy as np
 from ._validate import as_positive, describe
 
 __all__ = ["Filter", "heat", "wave", "commute_time", "biharmonic", "polyharmonic",
-           "mexican_hat", "multiscale", "as_filter"]
+           "mexican_hat", "multiscale", "as_filter", "check_filter", "FILTERS", "by_name"]
 
 
 class Filter:
@@ -55,6 +55,11 @@ class Filter:
     derivative : callable, optional
         :math:`\varphi'(s)`; used to certify error bounds between sample points. When
         absent, the bound uses finite differences on a fine grid (see ``approx``).
+    key : hashable, optional
+        What makes two filters equal. Filters are values: those built by this module's
+        constructors are equal (and hash alike) when their kind and parameters are, so every
+        cache keyed by a filter is reused across calls (``heat(0.01) == heat(0.01)``). A user
+        filter defaults to the identity of ``fn``.
 
     Examples
     --------
@@ -65,7 +70,8 @@ class Filter:
     """
 
     def __init__(self, fn, name: str | None = None, singular: bool = False, is_complex: bool = False,
-                 square=None, kind: str | None = None, params: dict | None = None, derivative=None):
+                 square=None, kind: str | None = None, params: dict | None = None, derivative=None,
+                 key=None):
         if not callable(fn):
             raise TypeError(f"fn must be a callable of an array, got {describe(fn)}")
         self.fn = fn
@@ -76,6 +82,23 @@ class Filter:
         self.params = dict(params or {})
         self.derivative = derivative
         self._square = square
+        if key is None:
+            key = (("kind", kind, tuple(sorted(self.params.items()))) if kind is not None
+                   else ("fn", fn, self.name))
+        self.key = (key, self.singular, self.is_complex)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Filter) and self.key == other.key
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+    def at_zero(self):
+        """:math:`\varphi(0)`, with the convention :math:`\varphi(0) := 0` for singular filters."""
+        if self.singular:
+            return 0.0
+        with np.errstate(all="ignore"):
+            return np.asarray(self(np.zeros(1))).ravel()[0]
 
     def __call__(self, s):
         """φ(s) for an array ``s`` (float); singular filters return 0 at s == 0."""
@@ -104,9 +127,11 @@ class Filter:
             return self._square
         fn = self.fn
         if self.is_complex:
-            new = Filter(lambda s: np.abs(fn(s)) ** 2, name=f"|{self.name}|^2", singular=self.singular)
+            new = Filter(lambda s: np.abs(fn(s)) ** 2, name=f"|{self.name}|^2", singular=self.singular,
+                         key=("square", self.key))
         else:
-            new = Filter(lambda s: fn(s) ** 2, name=f"{self.name}^2", singular=self.singular)
+            new = Filter(lambda s: fn(s) ** 2, name=f"{self.name}^2", singular=self.singular,
+                         key=("square", self.key))
         self._square = new
         return new
 
@@ -123,6 +148,13 @@ def as_filter(filt) -> Filter:
     if callable(filt):
         return Filter(filt)
     raise TypeError(f"filter must be a spectral_igl.filters.Filter or a callable, got {describe(filt)}")
+
+
+def check_filter(filt) -> Filter:
+    """Validate a filter argument that must already be a :class:`Filter` (e.g. ``heat(t)``)."""
+    if not isinstance(filt, Filter):
+        raise TypeError("expected a spectral_igl.filters.Filter (e.g. filters.heat(t)), got " + describe(filt))
+    return filt
 
 
 def heat(t) -> Filter:
@@ -150,7 +182,7 @@ def wave(t) -> Filter:
     t = as_positive(t, "t")
     return Filter(lambda s: np.exp(-1j * t * s), name="wave", is_complex=True, kind="wave",
                   params={"t": t}, derivative=lambda s: -1j * t * np.exp(-1j * t * s),
-                  square=lambda: Filter(np.ones_like, name="one"))
+                  square=lambda: Filter(np.ones_like, name="one", key=("one",)))
 
 
 def _power(p: float, name: str) -> Filter:
@@ -204,7 +236,8 @@ def mexican_hat(t) -> Filter:
     return Filter(lambda s: t * s * np.exp(-t * s), name="mexican_hat", kind="mexican_hat",
                   params={"t": t}, derivative=lambda s: t * (1.0 - t * s) * np.exp(-t * s),
                   square=lambda: Filter(lambda s: (t * s) ** 2 * np.exp(-2.0 * t * s), name="mexican_hat^2",
-                                        derivative=lambda s: 2 * t * t * s * (1.0 - t * s) * np.exp(-2 * t * s)))
+                                        derivative=lambda s: 2 * t * t * s * (1.0 - t * s) * np.exp(-2 * t * s),
+                                        key=("square", "mexican_hat", t)))
 
 
 def multiscale(t, k, alpha) -> Filter:
@@ -239,4 +272,44 @@ def multiscale(t, k, alpha) -> Filter:
     return Filter(fn, name="multiscale", kind="multiscale", params={"t": t, "k": k, "alpha": a},
                   derivative=der,
                   square=lambda: Filter(lambda s: fn(s) ** 2, name="multiscale^2",
-                                        derivative=lambda s: 2.0 * fn(s) * der(s)))
+                                        derivative=lambda s: 2.0 * fn(s) * der(s),
+                                        key=("square", "multiscale", t, k, a)))
+
+
+def _diffusion(t) -> Filter:
+    """The heat filter at ``t / 2``, whose square :math:`e^{-ts}` defines the diffusion distance at t."""
+    return heat(as_positive(t, "t") / 2.0)
+
+
+#: The filters by name, read by the command line, the viewer and
+#: :func:`spectral_igl.quantity.evaluate`: name -> (constructor, whether it takes a time t).
+#: ``"diffusion"`` is the heat filter at t/2 (its square defines the diffusion distance at t).
+FILTERS = {
+    "heat": (heat, True),
+    "diffusion": (_diffusion, True),
+    "wave": (wave, True),
+    "mexican_hat": (mexican_hat, True),
+    "commute_time": (commute_time, False),
+    "biharmonic": (biharmonic, False),
+    "polyharmonic": (polyharmonic, False),
+}
+
+
+def by_name(name: str, t: float | None = None, order: int = 3) -> Filter:
+    """The filter called ``name`` in :data:`FILTERS`, at time ``t`` (or of ``order``, poly-harmonic).
+
+    Examples
+    --------
+    >>> by_name("diffusion", 0.2) == heat(0.1)
+    True
+    """
+    if not isinstance(name, str) or name not in FILTERS:
+        raise ValueError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
+    make, timed = FILTERS[name]
+    if timed:
+        if t is None:
+            raise ValueError(f"filter {name!r} needs a time t")
+        return make(t)
+    if name == "polyharmonic":
+        return make(order)
+    return make()

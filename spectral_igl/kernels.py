@@ -15,75 +15,16 @@ import numbers
 
 import numpy as np
 
-from ._validate import as_index, as_indices, as_positive, describe
-from .laplacian import Laplacian
+from ._validate import as_delta, as_index, as_indices, as_positive
+from .approx import spectral_operator
+from .filters import check_filter, heat
+from .laplacian import Laplacian, as_laplacian
 
-__all__ = ["spectral_kernel", "heat_kernel"]
+__all__ = ["spectral_kernel", "heat_kernel", "kernel_columns", "source_indices", "BLOCK"]
 
-_DELTAS = ("mass", "seed")
 #: columns per engine call; bounds the (n, block) work arrays
 BLOCK = 64
 
-
-# ---------------------------------------------------------------------------------------
-# helpers shared by kernels, distances and descriptors
-# ---------------------------------------------------------------------------------------
-def _check_lap(lap) -> Laplacian:
-    if not isinstance(lap, Laplacian):
-        raise TypeError(f"expected a spectral_igl.Laplacian, got {describe(lap)}")
-    return lap
-
-
-def _check_filter(filt):
-    if not callable(filt) or not hasattr(filt, "singular"):
-        raise TypeError(
-            "expected a spectral_igl.filters.Filter (e.g. filters.heat(t)), got " + describe(filt))
-    return filt
-
-
-def _check_delta(delta: str) -> str:
-    if delta not in _DELTAS:
-        raise ValueError(f"delta must be 'mass' (B^-1 e_i, converges) or 'seed' (e_i), got {delta!r}")
-    return delta
-
-
-def _filters():
-    from . import filters
-
-    return filters
-
-
-def _operator(lap, filt, method: str = "auto", tol: float = 1e-8):
-    """A :class:`SpectralOperator` for ``filt``, cached on ``lap`` per (filter, method, tol)."""
-    from . import SpectralOperator
-
-    return SpectralOperator(lap, filt, method=method, tol=tol)
-
-
-def abs_square(filt):
-    r"""The real filter :math:`|\varphi|^2` of ``filt`` (``filt.square`` for a real filter).
-
-    Spectral distances need :math:`|\varphi|^2`: for a complex filter such as the wave
-    kernel :math:`e^{-ist}`, :math:`\varphi^2 \ne |\varphi|^2`.
-    """
-    if not getattr(filt, "is_complex", False):
-        return filt.square
-    F = _filters().Filter
-
-    def fn(s, _f=filt):
-        return np.abs(_f(s)) ** 2
-
-    g = F(fn, name=f"|{getattr(filt, 'name', 'phi')}|^2", singular=bool(filt.singular))
-    return g
-
-
-def filter_at_zero(filt) -> complex:
-    """:math:`\\varphi(0)` with the convention :math:`\\varphi(0) := 0` for singular filters."""
-    if filt.singular:
-        return 0.0
-    with np.errstate(all="ignore"):
-        v = np.asarray(filt(np.zeros(1))).ravel()[0]
-    return v
 
 
 def _unit_columns(n: int, idx: np.ndarray, weights=None) -> np.ndarray:
@@ -99,7 +40,7 @@ def kernel_columns(lap, filt, idx, delta: str = "mass", method: str = "auto", to
 
     With ``return_bound`` also returns the (m,) certified B-norm error bound of each column.
     """
-    op = _operator(lap, filt, method, tol) if op is None else op
+    op = spectral_operator(lap, filt, method, tol) if op is None else op
     n = lap.n
     idx = np.asarray(idx, dtype=np.int64).reshape(-1)
     dtype = np.complex128 if getattr(filt, "is_complex", False) else np.float64
@@ -119,7 +60,7 @@ def _as_bound(b, m: int) -> np.ndarray:
     return np.broadcast_to(b, (m,)).copy() if b.size in (1, m) else np.full(m, np.nan)
 
 
-def _sources(sources, n: int):
+def source_indices(sources, n: int):
     """(indices, scalar?) for a vertex index or a 1-D array of them."""
     if isinstance(sources, (numbers.Integral, np.integer)) and not isinstance(sources, (bool, np.bool_)):
         return np.array([as_index(sources, n, "source")]), True
@@ -172,10 +113,10 @@ def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: 
     >>> k.shape
     (162,)
     """
-    lap = _check_lap(lap)
-    filt = _check_filter(filt)
-    delta = _check_delta(delta)
-    idx, scalar = _sources(sources, lap.n)
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
+    delta = as_delta(delta)
+    idx, scalar = source_indices(sources, lap.n)
     K = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol)
     return K[:, 0] if scalar else K
 
@@ -199,4 +140,4 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     True
     """
     t = as_positive(t, "t")
-    return spectral_kernel(lap, _filters().heat(t), sources, delta=delta, method=method, tol=tol)
+    return spectral_kernel(lap, heat(t), sources, delta=delta, method=method, tol=tol)

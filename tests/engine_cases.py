@@ -1,10 +1,8 @@
 """Shapes with dense ground truth shared by the engine tests."""
 import numpy as np
-import pytest
 
 import spectral_igl as sig
 from data_generators import box_tets, icosphere
-from spectral_igl import filters
 
 HEAT_TIMES = [1e-5, 1e-3, 1e-1, 10.0]
 

@@ -1,12 +1,11 @@
 """Wave, singular and user filters, kernel columns, identities, lambda_max and validation."""
 import numpy as np
 import pytest
+from engine_cases import HEAT_TIMES, SHAPES, bnorm, check, shape, truth  # noqa: F401
 
 import spectral_igl as sig
-from engine_cases import HEAT_TIMES, SHAPES, bnorm, check, shape, truth  # noqa: F401
 from data_generators import icosphere
 from spectral_igl import filters
-
 
 FILTERS = [filters.wave(0.01), filters.biharmonic(), filters.commute_time(),
            filters.polyharmonic(3), filters.polyharmonic(4), filters.mexican_hat(0.01),

@@ -1,9 +1,9 @@
 """Heat methods against the dense ground truth; the certified bound is never below the error."""
 import numpy as np
 import pytest
+from engine_cases import HEAT_TIMES, SHAPES, bnorm, check, shape, truth  # noqa: F401
 
 import spectral_igl as sig
-from engine_cases import HEAT_TIMES, SHAPES, bnorm, check, shape, truth  # noqa: F401
 from spectral_igl import filters
 
 

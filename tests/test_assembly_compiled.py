@@ -6,7 +6,7 @@ import spectral_igl as sig
 from data_generators import cylinder, icosphere, sphere_points, torus
 from spectral_igl.laplacian import anisotropic, points
 
-_assembly = pytest.importorskip("spectral_igl._assembly")
+_assembly = pytest.importorskip("spectral_igl.laplacian._assembly")
 
 
 @pytest.mark.parametrize("shape", ["sphere", "torus", "cylinder", "noisy"])

@@ -5,7 +5,12 @@ import scipy.sparse as sp
 
 from data_generators import icosphere
 from spectral_igl.laplacian._operator import _symmetrize, _zero_row_sums
-from spectral_igl.laplacian.mesh import _full_mass, _star_adjacency, element_measures, mesh_components
+from spectral_igl.laplacian.mesh import (
+    element_measures,
+    full_mass,
+    mesh_components,
+    star_adjacency,
+)
 
 
 def _reference_zero_row_sums(L):
@@ -44,7 +49,7 @@ def test_zero_row_sums_matches_sparse_formula(diag):
 def test_full_mass_and_star_components():
     V, F = icosphere(2)
     n = len(V)
-    B = _full_mass(V, F)
+    B = full_mass(V, F)
     ref = sp.csr_matrix((n, n))
     meas = element_measures(V, F)
     for a in range(3):
@@ -56,6 +61,6 @@ def test_full_mass_and_star_components():
     F2 = np.vstack([F, F[:5] + n])  # a second component sharing no vertex
     V2 = np.vstack([V, V])
     c1 = connected_components(mesh_components(2 * n, F2), directed=False)
-    c2 = connected_components(_star_adjacency(2 * n, F2), directed=False)
+    c2 = connected_components(star_adjacency(2 * n, F2), directed=False)
     assert c1[0] == c2[0] and np.array_equal(c1[1], c2[1])
     assert V2.shape[0] == 2 * n

@@ -11,7 +11,10 @@ pytest.importorskip("spectral_igl.filters")
 import spectral_igl as sig  # noqa: E402
 from data_generators import box_tets, icosphere  # noqa: E402
 from spectral_igl.applications import (  # noqa: E402
-    critical_points, diffusion_basis, feature_points, graph_extrema,
+    critical_points,
+    diffusion_basis,
+    feature_points,
+    graph_extrema,
 )
 
 

@@ -105,10 +105,10 @@ def _dense_distance(lap, i, phi2):
 
 
 def test_distance_writes_npy_csv_png(tmp_path, capsys):
+    from test_viz import assert_not_blank
+
     import spectral_igl as sig
     from data_generators import icosphere
-
-    from test_viz import assert_not_blank
 
     npy, csv, png = tmp_path / "d.npy", tmp_path / "d.csv", tmp_path / "sub" / "d.png"
     code = main(["distance", "--shape", "sphere", "--level", "2", "--source", "7", "--filter",
@@ -129,7 +129,6 @@ def test_distance_writes_npy_csv_png(tmp_path, capsys):
 def test_kernel_on_mesh_files(tmp_path):
     import spectral_igl as sig
     from data_generators import box_tets, icosphere
-
     from spectral_igl.io import write_mesh
 
     V, F = icosphere(2)
@@ -172,7 +171,6 @@ def _dense(lap):
 
 def test_generated_shapes_torus_cylinder(tmp_path):
     import data_generators as dg
-
     import spectral_igl as sig
 
     for shape, (V, F) in (("torus", dg.torus(1.0, 0.4, n_major=24, n_minor=6)),
@@ -189,9 +187,8 @@ def test_generated_shapes_torus_cylinder(tmp_path):
 
 
 def test_hks_against_dense(tmp_path, capsys):
-    from data_generators import icosphere
-
     import spectral_igl as sig
+    from data_generators import icosphere
 
     out, png = tmp_path / "h.npy", tmp_path / "h.png"
     assert main(["hks", "--shape", "sphere", "--level", "2", "--times", "0.01", "0.1",
@@ -208,9 +205,8 @@ def test_hks_against_dense(tmp_path, capsys):
 
 
 def test_smooth_signal_and_shape(tmp_path, capsys):
-    from data_generators import icosphere
-
     import spectral_igl as sig
+    from data_generators import icosphere
     from spectral_igl.io import read_mesh
 
     V, F = icosphere(2)
@@ -269,9 +265,9 @@ def test_computation_errors_exit_1(capsys):
 
 def test_real_meshes(shared_meshes, tmp_path):
     """Triangle meshes with one and several components, and a tetrahedral mesh."""
-    from spectral_igl.io import read_mesh
-
     from test_viz import assert_not_blank
+
+    from spectral_igl.io import read_mesh
 
     # several components: distances stay finite, zero at the source only
     out, png = tmp_path / "suzanne.npy", tmp_path / "suzanne.png"

@@ -7,9 +7,22 @@ import numpy as np
 import pytest
 
 import spectral_igl as sig
-from data_generators import (cylinder, cylinder_eigenvalues, gaussian_noise, icosphere, make_holes,
-                             mean_edge_length, normal_noise, resample, sample_points, sphere_eigenvalues,
-                             sphere_points, torus, uv_sphere, vertex_normals)
+from data_generators import (
+    cylinder,
+    cylinder_eigenvalues,
+    gaussian_noise,
+    icosphere,
+    make_holes,
+    mean_edge_length,
+    normal_noise,
+    resample,
+    sample_points,
+    sphere_eigenvalues,
+    sphere_points,
+    torus,
+    uv_sphere,
+    vertex_normals,
+)
 
 
 def test_uv_sphere_spectrum_and_orientation():

@@ -3,11 +3,10 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import MESH_DIR, read_shared_mesh
 
 import spectral_igl as sig
-from spectral_igl._factor import factorize
-
-from conftest import MESH_DIR, read_shared_mesh
+from spectral_igl.linalg import factorize
 
 MESHES = sorted(p.name for p in MESH_DIR.glob("*")) if MESH_DIR.is_dir() else ["absent"]
 # components as the data README lists them (stanford-bunny: 1 surface + 1,113 unreferenced)

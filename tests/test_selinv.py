@@ -6,7 +6,7 @@ from _spectral_truth import dense_kernel, dense_sq_distances, torus
 
 import spectral_igl as sig
 from data_generators import box_tets, icosphere
-from spectral_igl._selinv import LDLT, Pattern, available
+from spectral_igl.linalg.ldlt import LDLT, Pattern, available
 
 F = pytest.importorskip("spectral_igl.filters")
 pytestmark = pytest.mark.skipif(not available(), reason="compiled LDLT or pymetis missing")
@@ -136,14 +136,14 @@ def test_selinv_one_to_all_at_10k_matches_exact_norms(t):
 def test_shifted_factor_ldlt_accepts_definite_and_refuses_indefinite(lap_torus):
     """theta B + beta L needs no pivoting when a part of it is definite, also negative
     definite (a real pole above the spectrum); an indefinite real shift is refused."""
-    from spectral_igl.approx import lambda_max
+    from spectral_igl.laplacian import lambda_max
 
     lap = lap_torus
     b = lambda_max(lap)
     rhs = np.random.default_rng(2).standard_normal(lap.n)
     for beta, theta in [(1.0, -1.5 * b), (1.0, 2.0), (0.5, -3.0 + 1.0j)]:
-        fac = sig.solvers.shifted_factor(lap, beta, theta, backend="ldlt")
+        fac = sig.linalg.shifted_factor(lap, beta, theta, backend="ldlt")
         A = (theta * lap.B + beta * lap.L).toarray()
         assert np.abs(fac.solve(rhs) - np.linalg.solve(A, rhs)).max() <= 1e-10 * np.abs(np.linalg.solve(A, rhs)).max()
     with pytest.raises(ValueError, match="definite"):
-        sig.solvers.shifted_factor(lap, 1.0, -0.5 * b, backend="ldlt")
+        sig.linalg.shifted_factor(lap, 1.0, -0.5 * b, backend="ldlt")

@@ -6,7 +6,12 @@ import pytest
 
 import spectral_igl as sig
 from data_generators import icosphere
-from spectral_igl.applications import critical_points, harmonic, smooth, smooth_constrained
+from spectral_igl.applications import (
+    critical_points,
+    harmonic,
+    smooth,
+    smooth_constrained,
+)
 
 
 @pytest.fixture(scope="module")

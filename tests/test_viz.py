@@ -7,7 +7,6 @@ import sys
 import numpy as np
 import pytest
 
-
 from spectral_igl.viz import colormap, levelset_values, plot_levelsets  # noqa: E402
 
 
@@ -187,7 +186,6 @@ def test_bad_input_is_rejected(sphere):
 def viewer():
     import spectral_igl as sig
     from data_generators import icosphere
-
     from spectral_igl.viz import Viewer
 
     lap = sig.laplacian(*icosphere(2))

@@ -6,7 +6,11 @@ import numbers
 import numpy as np
 
 from .._validate import as_indices, as_nonnegative, as_positive, as_signal, describe
-from .harmonic import _check_lap
+from ..approx import SpectralOperator
+from ..descriptors import auto_diffusion_function
+from ..filters import heat
+from ..laplacian import as_laplacian
+from ..linalg import eigs
 
 __all__ = ["diffusion_basis", "feature_points", "graph_extrema"]
 
@@ -35,14 +39,12 @@ def diffusion_basis(lap, t, centers, method: str = "auto", tol: float = 1e-8):
         partition of unity weighted by the areas: :math:`\sum_i m_i \psi_i = \mathbf 1`
         with :math:`m = B\mathbf 1` (on each connected component).
     """
-    from .. import SpectralOperator, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     t = as_positive(t, "t")
     centers = as_indices(centers, lap.n, "centers")
     E = np.zeros((lap.n, centers.size))
     E[centers, np.arange(centers.size)] = 1.0
-    op = SpectralOperator(lap, filters.heat(t), method=method, tol=tol)
+    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
     return np.real(op.apply_inverse_mass(E))
 
 
@@ -116,7 +118,7 @@ def graph_extrema(lap, f, persistence: float = 0.0):
     minima, maxima : (p,) int, (q,) int
         Sorted vertex indices.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
@@ -173,10 +175,8 @@ def feature_points(lap, n_eigenfunctions: int = 6, t: float = 0.1, source: str =
         of :func:`graph_extrema`) of each eigenfunction (``"eigenfunctions"``) or the
         maxima of the auto-diffusion function (``"adf"``, tips of protrusions).
     """
-    from ..descriptors import auto_diffusion_function
-    from ..laplacian import eigs
 
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     if source not in ("eigenfunctions", "adf"):
         raise ValueError(f"source must be 'eigenfunctions' or 'adf', got {source!r}")
     if source == "adf":

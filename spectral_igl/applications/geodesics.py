@@ -4,10 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
 from .._validate import as_indices, as_positive, describe
+from ..approx import SpectralOperator
+from ..filters import heat
 from ..laplacian import Laplacian, laplacian
 from ..laplacian.mesh import element_measures
+from ..linalg import factorize
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
 
@@ -180,9 +182,7 @@ class HeatGeodesics:
             self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
         if step == "engine":
-            from .. import SpectralOperator, filters
-
-            self._op = SpectralOperator(lap, filters.heat(self.t))
+            self._op = SpectralOperator(lap, heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
         # Poisson solve: ground one vertex per component (the rhs is consistent)
@@ -289,8 +289,6 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     length ``h`` the discrete kernel also departs from the smooth one for
     :math:`t \lesssim h^2`. Measured accuracy is in ``benchmarks/geodesics.py``.
     """
-    from .. import SpectralOperator, filters
-
     lap = _as_laplacian(lap_or_mesh)
     src = as_indices(source, lap.n, "source")
     if src.size != 1:
@@ -300,7 +298,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     t = 4.0 * h ** 2 if t is None else as_positive(t, "t")
     e = np.zeros(lap.n)
     e[src[0]] = 1.0
-    op = SpectralOperator(lap, filters.heat(t), method=method, tol=tol)
+    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
     K = np.real(op.apply_inverse_mass(e))
     D = 2.0 if lap.domain == "triangle" else 3.0
     with np.errstate(divide="ignore", invalid="ignore"):

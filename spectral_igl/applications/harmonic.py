@@ -6,20 +6,14 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
 from .._validate import as_indices, describe
-from ..laplacian import Laplacian
+from ..laplacian import Laplacian, as_laplacian
+from ..linalg import factorize
 
-__all__ = ["harmonic"]
-
-
-def _check_lap(lap) -> Laplacian:
-    if not isinstance(lap, Laplacian):
-        raise TypeError(f"lap must be a spectral_igl.Laplacian, got {describe(lap)}")
-    return lap
+__all__ = ["harmonic", "constraints", "polyharmonic_matrix"]
 
 
-def _constraints(lap: Laplacian, fixed, values):
+def constraints(lap: Laplacian, fixed, values):
     n = lap.n
     fixed = as_indices(fixed, n, "fixed")
     if np.unique(fixed).size != fixed.size:
@@ -93,10 +87,10 @@ def harmonic(lap, fixed, values, k: int = 1):
     >>> float(h[0]), float(h[5]), bool(h.min() >= 0 and h.max() <= 1)
     (0.0, 1.0, True)
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, (numbers.Integral, np.integer)) or k < 1:
         raise ValueError(f"k must be a positive integer, got {describe(k)}")
-    fixed, vals = _constraints(lap, fixed, values)
+    fixed, vals = constraints(lap, fixed, values)
     n = lap.n
     free = np.setdiff1d(np.arange(n), fixed)
     out = np.empty((n,) + vals.shape[1:])

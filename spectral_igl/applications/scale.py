@@ -6,7 +6,10 @@ import numbers
 import numpy as np
 
 from .._validate import as_signal, describe
-from .harmonic import _check_lap
+from ..approx import apply_filter
+from ..filters import heat
+from ..laplacian import as_laplacian, lambda_max
+from ..linalg import eigs
 
 __all__ = ["optimal_time"]
 
@@ -115,10 +118,8 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     the mesh, hardly separable from the noise, and the gain of any smoothing is small.
     Cost: one heat evaluation of ``1 + probes`` columns per time.
         """
-    from .. import apply_filter, filters
-    from ..laplacian import eigs
 
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
@@ -126,8 +127,6 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         raise ValueError(f"rule must be 'risk' or 'lcurve', got {rule!r}")
     if isinstance(probes, bool) or not isinstance(probes, numbers.Integral) or probes < 1:
         raise ValueError(f"probes must be a positive integer, got {describe(probes)}")
-    from .. import lambda_max
-
     lmax = float(lambda_max(lap))
     if ts is None:
         lam = np.asarray(eigs(lap, lap.n_components + 1)[0])
@@ -148,7 +147,7 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         method = "chebyshev"
     R, ED, EN, RM2, TMS, TRES = (np.empty(n_t) for _ in range(6))
     for i, t in enumerate(ts):
-        Y = np.real(apply_filter(lap, filters.heat(t), X, method=method, tol=tol))
+        Y = np.real(apply_filter(lap, heat(t), X, method=method, tol=tol))
         F = Y[:, 0]
         d = F - f
         R[i] = np.sqrt(max(d @ (lap.B @ d), 0.0))

@@ -4,9 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._factor import factorize
 from .._validate import as_indices, as_nonnegative, as_positive, as_signal
-from .harmonic import _check_lap, _constraints, polyharmonic_matrix
+from ..approx import apply_filter
+from ..filters import heat
+from ..laplacian import as_laplacian
+from ..linalg import factorize
+from .harmonic import constraints, polyharmonic_matrix
 
 __all__ = ["smooth", "smooth_constrained", "diffusion_smooth"]
 
@@ -42,7 +45,7 @@ def smooth(lap, f, eps):
     :math:`\tilde f = \sum_i \varepsilon (\lambda_i^2 + \varepsilon)^{-1}
     \langle f, x_i\rangle_B\, x_i`.
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     eps = as_positive(eps, "eps")
     A = polyharmonic_matrix(lap, 2) + eps * lap.B
@@ -75,11 +78,11 @@ def smooth_constrained(lap, f, fixed, eps: float = 0.0):
     -------
     (n,) or (n, k) float
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     eps = as_nonnegative(eps, "eps")
     fixed = as_indices(fixed, lap.n, "fixed")
-    fixed, vals = _constraints(lap, fixed, f[fixed]) if eps == 0.0 else (fixed, f[fixed])
+    fixed, vals = constraints(lap, fixed, f[fixed]) if eps == 0.0 else (fixed, f[fixed])
     if np.unique(fixed).size != fixed.size:
         raise ValueError("fixed has duplicate indices")
     n = lap.n
@@ -116,9 +119,7 @@ def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8):
     -------
     (n,) or (n, k) float
     """
-    from .. import apply_filter, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     t = as_positive(t, "t")
-    return np.real(apply_filter(lap, filters.heat(t), f, method=method, tol=tol))
+    return np.real(apply_filter(lap, heat(t), f, method=method, tol=tol))

@@ -6,7 +6,10 @@ import warnings
 import numpy as np
 
 from .._validate import as_positive, as_signal
-from .harmonic import _check_lap
+from ..approx import SpectralOperator
+from ..filters import heat
+from ..laplacian import as_laplacian
+from .geodesics import mean_edge_length
 
 __all__ = ["wasserstein_distance", "sinkhorn"]
 
@@ -43,13 +46,11 @@ def sinkhorn(lap, mu0, mu1, gamma, op=None, max_iter: int = 2000, tol: float = 1
     Kernel applications go through the engine (``op``, a heat
     :class:`spectral_igl.SpectralOperator`, reused across calls when given).
     """
-    from .. import SpectralOperator, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
     if op is None:
-        op = SpectralOperator(lap, filters.heat(gamma / 4.0), method=method, tol=kernel_tol)
+        op = SpectralOperator(lap, heat(gamma / 4.0), method=method, tol=kernel_tol)
     a = lap.mass
     s0, s1 = mu0 > 0, mu1 > 0
     tiny = np.finfo(float).tiny
@@ -149,15 +150,12 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
     icosphere(5): -2.4%, -8.3%, -18% (there the kernel range above also binds). Use
     :math:`\gamma \ge 10 h^2`; below, the result drifts low.
     """
-    from .. import SpectralOperator, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
     if np.array_equal(mu0, mu1):
         return 0.0
     if lap.domain in ("triangle", "tet") and "V" in lap.data:
-        from .geodesics import mean_edge_length
 
         h = mean_edge_length(lap.data["V"], lap.data["F" if lap.domain == "triangle" else "T"])
         if gamma < 10.0 * h * h:
@@ -165,7 +163,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
                           "edge length): the discrete heat kernel is far from its smooth limit at "
                           "t = gamma/4 and the distance drifts low", RuntimeWarning, stacklevel=2)
     # one operator (and its cached factorizations) for all three transport problems
-    op = SpectralOperator(lap, filters.heat(gamma / 4.0), method=method, tol=kernel_tol)
+    op = SpectralOperator(lap, heat(gamma / 4.0), method=method, tol=kernel_tol)
     kw = dict(op=op, max_iter=max_iter, tol=tol)
     vals = []
     for a, b in ((mu0, mu1), (mu0, mu0), (mu1, mu1)):

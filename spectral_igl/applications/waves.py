@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 from .._validate import as_signal, describe
-from .harmonic import _check_lap
+from ..approx import apply_filter
+from ..filters import wave
+from ..laplacian import as_laplacian
 
 __all__ = ["schrodinger"]
 
@@ -33,10 +35,7 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     import numbers
 
     import numpy as np
-
-    from .. import apply_filter, filters
-
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     h = as_signal(h, lap.n, "h")
     if isinstance(t, bool) or not isinstance(t, numbers.Real):
         raise TypeError(f"t must be a real number, got {describe(t)}")
@@ -44,5 +43,5 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     if t == 0.0:
         return h.astype(complex)
     if t < 0:  # e^{+i|t|L} h is the conjugate of e^{-i|t|L} conj(h): L is real
-        return np.conj(apply_filter(lap, filters.wave(-t), np.conj(h), method=method, tol=tol))
-    return apply_filter(lap, filters.wave(t), h, method=method, tol=tol)
+        return np.conj(apply_filter(lap, wave(-t), np.conj(h), method=method, tol=tol))
+    return apply_filter(lap, wave(t), h, method=method, tol=tol)

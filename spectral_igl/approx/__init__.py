@@ -10,7 +10,7 @@ ker L). Since :math:`\tilde L` is self-adjoint in the B-inner product,
 
 and that number (plus a rounding term for the solves) is reported as ``error_bound``.
 The Lanczos methods report their a-priori bound
-:math:`2\min_{p}\max|g - p|\,\|f\|_B` instead (see :mod:`._krylov`).
+:math:`2\min_{p}\max|g - p|\,\|f\|_B` instead (see :mod:`.krylov`).
 
 Methods
 -------
@@ -31,20 +31,26 @@ Methods
 """
 from __future__ import annotations
 
+import logging
+
 import numpy as np
+import scipy.sparse.linalg as spla
 
-from .._validate import as_positive, as_signal, describe
+from .._validate import as_positive, as_signal
 from ..filters import Filter, as_filter
-from ..laplacian import Laplacian
-from ._common import bnorm, inv_bnorm_upper, lambda_max, lambda_min_positive
-from ._contour import ContourPlan
-from ._krylov import KrylovPlan, ShiftInvertPlan
-from ._polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
-from ._rational import RationalPlan
-from ._spectral import DensePlan, EigenPlan
+from ..laplacian import Laplacian, as_laplacian, lambda_max
+from ..linalg import check_backend, lambda_min_positive
+from .common import bnorm, inv_bnorm_upper
+from .contour import ContourPlan
+from .krylov import KrylovPlan, ShiftInvertPlan
+from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
+from .rational import RationalPlan
+from .spectral import DensePlan, EigenPlan
 
-__all__ = ["apply_filter", "SpectralOperator", "lambda_max", "lambda_min_positive", "METHODS",
+__all__ = ["apply_filter", "SpectralOperator", "spectral_operator", "METHODS", "HEAT_ONLY",
            "choose_method"]
+
+log = logging.getLogger(__name__)
 
 _PLANS = {
     "dense": DensePlan,
@@ -59,9 +65,10 @@ _PLANS = {
     "rational": RationalPlan,
     "contour": ContourPlan,
 }
-#: Valid method names.
+#: The engine's method names, read by every entry point, the command line and the viewer.
 METHODS = ("auto",) + tuple(_PLANS)
-_HEAT_ONLY = ("euler", "taylor1", "power", "contour")
+#: Methods that approximate the heat filter only.
+HEAT_ONLY = ("euler", "taylor1", "power", "contour")
 
 
 def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
@@ -90,19 +97,23 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     try:
         si = ShiftInvertPlan(lap, filt, a, b, tol)
         cost_si = 25.0 + si.m
-    except Exception:  # pragma: no cover - defensive: fall back to Chebyshev
+    except (ValueError, RuntimeError, ArithmeticError) as exc:  # pragma: no cover - defensive
+        log.debug("shift_invert not usable for %r: %s", filt, exc)
         cost_si = np.inf
     ch = ChebyshevPlan(lap, filt, a, b, tol, max_degree=20000)
     cost_ch = (0.0 if lap.lumped else 25.0) + ch.m * (0.2 if lap.lumped else 1.0)
     return "chebyshev" if cost_ch <= cost_si else "shift_invert"
 
 
-class SpectralOperator:
+class SpectralOperator(spla.LinearOperator):
     r"""Reusable :math:`f \mapsto \varphi(\tilde L) f` for one Laplacian, filter and method.
 
     The scalar approximation (poles, coefficients, degree) is built once; factorizations
     are cached on the Laplacian, so applying to many signals, or to kernel columns, only
-    costs the solves.
+    costs the solves. It is a :class:`scipy.sparse.linalg.LinearOperator` (``op @ f``,
+    ``op.matvec``, ``op.matmat``), so it plugs into scipy's iterative solvers and
+    eigensolvers; its Euclidean adjoint is :math:`B\,\bar\varphi(\tilde L)B^{-1}` (the
+    operator itself is self-adjoint in the B-inner product).
 
     .. math:: u = \varphi(B^{-1}L)\, f, \qquad \|u - \varphi(\tilde L) f\|_B \le
               \texttt{error\_bound}
@@ -142,24 +153,23 @@ class SpectralOperator:
     >>> lap = sig.laplacian(*icosphere(3))
     >>> op = sig.SpectralOperator(lap, filters.heat(0.01), method="rational")
     >>> u = op.apply(np.ones(lap.n))          # heat preserves constants
-    >>> bool(np.allclose(u, 1.0)), op.error_bound < 1e-8 * np.sqrt(lap.area())
+    >>> bool(np.allclose(u, 1.0)), bool(op.error_bound < 1e-8 * np.sqrt(lap.area()))
     (True, True)
     """
 
     def __init__(self, lap: Laplacian, filt, method: str = "auto", tol: float = 1e-8,
                  backend: str = "auto", **options):
-        if not isinstance(lap, Laplacian):
-            raise TypeError(f"lap must be a spectral_igl.Laplacian, got {describe(lap)}")
+        lap = as_laplacian(lap)
         filt = as_filter(filt)
         tol = as_positive(tol, "tol")
         if not isinstance(method, str) or method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        from ..solvers import _check_backend
-
-        backend = _check_backend(backend)
+        backend = check_backend(backend)
+        super().__init__(np.complex128 if filt.is_complex else np.float64, (lap.n, lap.n))
         if method == "auto":
             method = choose_method(lap, filt, tol)
-        if method in _HEAT_ONLY and filt.kind != "heat":
+            log.info("auto chose method %r for %r (n=%d, tol=%g)", method, filt, lap.n, tol)
+        if method in HEAT_ONLY and filt.kind != "heat":
             raise ValueError(f"method {method!r} approximates the heat filter only, got {filt!r}; "
                              "use 'rational', 'chebyshev', 'shift_invert' or 'krylov'")
         self.lap, self.filter, self.method, self.tol = lap, filt, method, tol
@@ -174,6 +184,28 @@ class SpectralOperator:
             raise TypeError(f"invalid options for method {method!r}: {sorted(options)} ({err})") from err
         self.n_solves = getattr(self.plan, "n_solves", None)
         self.error_bound = None
+        pf = getattr(self.plan, "pf", None)
+        log.debug("%s: %s solves per column, degree %s, poles %s", self, self.n_solves,
+                  getattr(self.plan, "m", None), None if pf is None else [z for _, z, _ in pf.terms])
+
+    def _matvec(self, x):
+        return self.apply(np.asarray(x).reshape(-1))
+
+    def _matmat(self, X):
+        return self.apply(np.asarray(X))
+
+    def _adjoint_apply(self, y):
+        # A^H y = B conj(phi)(L~) B^-1 y = conj(B phi(L~) B^-1 conj(y))
+        y = np.asarray(y)
+        if self.filter.is_complex:
+            return np.conj(self.lap.B @ self.apply_inverse_mass(np.conj(y)))
+        return self.lap.B @ self.apply_inverse_mass(y)
+
+    def _rmatvec(self, y):
+        return self._adjoint_apply(np.asarray(y).reshape(-1))
+
+    def _rmatmat(self, Y):
+        return self._adjoint_apply(Y)
 
     def __repr__(self) -> str:
         return (f"SpectralOperator({self.filter!r}, method={self.method!r}, tol={self.tol:g}, "
@@ -239,3 +271,26 @@ def apply_filter(lap: Laplacian, filt, f, method: str = "auto", tol: float = 1e-
     u : same shape as ``f``; complex for complex filters (wave).
     """
     return SpectralOperator(lap, filt, method=method, tol=tol, **options).apply(f)
+
+
+def spectral_operator(lap: Laplacian, filt, method: str = "auto", tol: float = 1e-8,
+                      backend: str = "auto") -> SpectralOperator:
+    """The :class:`SpectralOperator` of ``(filt, method, tol, backend)``, cached on ``lap``.
+
+    Filters are values, so every call with an equal filter (``filters.heat(0.1)`` built
+    anew, say) reuses the same operator: its poles, degree and factorizations.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> a = sig.spectral_operator(lap, sig.filters.heat(0.1))
+    >>> a is sig.spectral_operator(lap, sig.filters.heat(0.1))
+    True
+    """
+    lap = as_laplacian(lap)
+    filt = as_filter(filt)
+    key = (filt, method, float(as_positive(tol, "tol")), backend)
+    return lap.cache.fetch("operator", key, lambda: SpectralOperator(lap, filt, method=method, tol=tol,
+                                                                      backend=backend))

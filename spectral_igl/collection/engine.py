@@ -22,7 +22,7 @@ from .jobs import Job
 from .store import check_name, clean_partial, open_root, read_record, write_record
 
 __all__ = ["run", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
-           "inspect_shape", "input_hash"]
+           "inspect_shape", "input_hash", "estimate_nnz"]
 
 #: file types read by :func:`spectral_igl.io.read_mesh` (a directory input means these)
 MESH_TYPES = (".obj", ".off", ".ply", ".stl", ".wrl", ".mesh")
@@ -176,7 +176,7 @@ def _file_digest(path) -> str:
     return h.hexdigest()
 
 
-def _nnz(n, C):
+def estimate_nnz(n, C) -> int:
     """nnz of L: n plus twice the number of edges (k-NN graph estimate for point sets)."""
     if C is None:
         return 41 * n          # symmetrised k-nearest-neighbour graph, k about 20
@@ -232,7 +232,7 @@ def inspect_shape(shape: Shape) -> dict:
         V, C = _read(shape)
         n = len(V)
         domain = "points" if C is None else ("tet" if np.asarray(C).shape[1] == 4 else "triangle")
-        info.update(n=n, nnz=_nnz(n, C), domain=domain)
+        info.update(n=n, nnz=estimate_nnz(n, C), domain=domain)
     except Exception as err:  # noqa: BLE001 - reported as this shape's failure
         info["error"] = f"{type(err).__name__}: {err}"
         info["transient"] = _transient(err)

@@ -14,13 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import as_indices, as_positive, describe
+from ..filters import FILTERS, by_name
 
-__all__ = ["Job", "FILTERS"]
-
-#: filters a kernel-diagonal or distance job may name, and whether they take a time ``t``
-FILTERS = {"heat": True, "diffusion": True, "wave": True, "mexican_hat": True,
-           "commute_time": False, "biharmonic": False, "polyharmonic": False}
-
+__all__ = ["Job"]
 
 def _floats(x, name):
     a = np.asarray(x, dtype=float) if not isinstance(x, (str, bytes)) else None
@@ -33,7 +29,7 @@ def _filter_params(filter, t, order):
     if filter not in FILTERS:
         raise ValueError(f"filter must be one of {tuple(FILTERS)}, got {filter!r}")
     params = {"filter": filter}
-    if FILTERS[filter]:
+    if FILTERS[filter][1]:
         if t is None:
             raise ValueError(f"filter {filter!r} needs a time t, got None")
         params["t"] = as_positive(t, "t")
@@ -47,20 +43,7 @@ def _filter_params(filter, t, order):
 
 
 def _make_filter(params):
-    from .. import filters
-
-    name = params["filter"]
-    if name in ("heat", "diffusion"):
-        return filters.heat(params["t"])
-    if name == "wave":
-        return filters.wave(params["t"])
-    if name == "mexican_hat":
-        return filters.mexican_hat(params["t"])
-    if name == "commute_time":
-        return filters.commute_time()
-    if name == "biharmonic":
-        return filters.biharmonic()
-    return filters.polyharmonic(params["order"])
+    return by_name(params["filter"], params.get("t"), params.get("order", 3))
 
 
 def _source_digest(fn):
@@ -90,6 +73,17 @@ class Job:
         JSON-able parameters; with ``kind`` they identify the result in the store.
     fn : callable or None
         The user function of :meth:`function`.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from data_generators import icosphere
+    >>> job = Job.hks([0.1, 1.0])
+    >>> arrays, bounds = job("sphere", sig.laplacian(*icosphere(2)))
+    >>> arrays["hks"].shape, len(bounds["abs_error_bound"])
+    ((162, 2), 2)
+    >>> Job.hks([0.1, 1.0]).key() == job.key() != Job.hks([0.1]).key()
+    True
     """
 
     kind: str
@@ -128,8 +122,10 @@ class Job:
 
         .. math:: G = \varphi(\tilde L) B^{-1}
 
-        ``filter`` is one of :data:`FILTERS` (``"diffusion"`` is ``"heat"``); ``t`` for the
-        filters with a time, ``order`` for ``"polyharmonic"``. Stores ``"diagonal"``: (n,).
+        ``filter`` is a name of :data:`spectral_igl.filters.FILTERS` (as in
+        :func:`spectral_igl.filters.by_name`: ``"diffusion"`` at t is ``heat(t / 2)``); ``t``
+        for the filters with a time, ``order`` for ``"polyharmonic"``. Stores
+        ``"diagonal"``: (n,).
         """
         params = _filter_params(filter, t, order)
         params.update(method=str(method), tol=as_positive(tol, "tol"))
@@ -204,11 +200,11 @@ class Job:
 
         p = self.params
         if self.kind == "hks":
-            from .. import filters
+            from ..filters import heat
 
             cols, bounds = [], []
             for t in p["times"]:
-                d, info = kernel_diagonal(lap, filters.heat(t), method=p["method"], tol=p["tol"],
+                d, info = kernel_diagonal(lap, heat(t), method=p["method"], tol=p["tol"],
                                           return_info=True)
                 cols.append(np.asarray(d, dtype=float).reshape(lap.n))
                 bounds.append(info.get("abs_error_bound"))
@@ -239,7 +235,7 @@ class Job:
             return ({"distances": np.stack(rows), "sources": np.asarray(p["sources"], dtype=np.int64)},
                     {"d2_error_bound": bounds, "method": info.get("method")})
         if self.kind == "eigenvalues":
-            from ..laplacian import dense_eigs, eigs
+            from ..linalg import dense_eigs, eigs
 
             k = p["k"]
             if k > lap.n:
@@ -259,16 +255,17 @@ class Job:
 
 
 def _distance(lap, p, s):
-    from .. import distances as dist
+    from ..distances import (biharmonic_distance, commute_time_distance, diffusion_distance,
+                             polyharmonic_distance, spectral_distance)
 
     kw = dict(method=p["method"], tol=p["tol"], return_info=True)
     name = p["filter"]
     if name == "diffusion":
-        return dist.diffusion_distance(lap, p["t"], s, **kw)
+        return diffusion_distance(lap, p["t"], s, **kw)
     if name == "biharmonic":
-        return dist.biharmonic_distance(lap, s, **kw)
+        return biharmonic_distance(lap, s, **kw)
     if name == "commute_time":
-        return dist.commute_time_distance(lap, s, **kw)
+        return commute_time_distance(lap, s, **kw)
     if name == "polyharmonic":
-        return dist.polyharmonic_distance(lap, p["order"], s, **kw)
-    return dist.spectral_distance(lap, _make_filter(p), s, **kw)
+        return polyharmonic_distance(lap, p["order"], s, **kw)
+    return spectral_distance(lap, _make_filter(p), s, **kw)

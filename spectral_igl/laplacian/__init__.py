@@ -1,15 +1,18 @@
-"""Domains to (L, B): triangle and tetrahedral meshes, point clouds, voxels, graphs."""
-from ._operator import Laplacian, make_laplacian
-from .eigen import dense_eigs, eigs
-from .mesh import laplacian
+"""Domains to (L, B): triangle and tetrahedral meshes, point clouds, voxels, graphs.
 
-# --- constructors ---
+Also the :class:`Laplacian`'s cache and the proved bounds of its spectrum that need no
+factorization.
+"""
+from ._operator import Laplacian, as_laplacian, make_laplacian
 from .anisotropic import anisotropic_laplacian
+from .bounds import lambda_max, mass_ratio
+from .cache import Cache
 from .graph import graph_laplacian
+from .mesh import laplacian
 from .points import point_cloud_laplacian
 from .tetrahedralize import tetrahedralize
 from .voxels import voxel_laplacian
 
-__all__ = ["Laplacian", "make_laplacian", "laplacian", "eigs", "dense_eigs",
+__all__ = ["Laplacian", "Cache", "make_laplacian", "as_laplacian", "laplacian",
            "point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
-           "graph_laplacian", "tetrahedralize"]
+           "graph_laplacian", "tetrahedralize", "lambda_max", "mass_ratio"]

@@ -7,7 +7,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.csgraph as csgraph
 
-__all__ = ["Laplacian", "make_laplacian"]
+from .._validate import describe
+from .cache import Cache
+
+__all__ = ["Laplacian", "make_laplacian", "as_laplacian"]
 
 
 @dataclass(eq=False)
@@ -31,9 +34,11 @@ class Laplacian:
     components : (n,) int
         Connected component label of each vertex (graph of the nonzeros of L).
     n_components : int
-    cache : dict
-        Factorizations and spectral bounds computed by later stages, reused across calls.
-        Never stale: L and B are not to be modified after construction.
+    cache : Cache
+        Factorizations, spectral bounds and other derived quantities computed by later
+        stages, reused across calls (``lap.cache.clear()`` frees them, ``lap.cache.nbytes``
+        reports their memory). Never stale: L and B are not to be modified after
+        construction.
     """
 
     L: sp.csr_matrix
@@ -42,7 +47,7 @@ class Laplacian:
     data: dict = field(default_factory=dict)
     components: np.ndarray = None
     n_components: int = 0
-    cache: dict = field(default_factory=dict, repr=False)
+    cache: Cache = field(default_factory=Cache, repr=False)
 
     @property
     def n(self) -> int:
@@ -64,12 +69,24 @@ class Laplacian:
 
         Columns :math:`z_c = 1_c / \sqrt{1_c^\top B 1_c}`, so :math:`Z^\top B Z = I`.
         """
-        if "component_basis" not in self.cache:
+        def build():
             n, c = self.n, self.n_components
             Z = sp.csr_matrix((np.ones(n), (np.arange(n), self.components)), shape=(n, c))
             area = np.asarray((Z.T @ (self.B @ Z)).diagonal()).ravel()
-            self.cache["component_basis"] = (Z @ sp.diags(1.0 / np.sqrt(area))).tocsr()
-        return self.cache["component_basis"]
+            return (Z @ sp.diags(1.0 / np.sqrt(area))).tocsr()
+
+        return self.cache.fetch("basis", "components", build)
+
+    def component_sum(self, f: np.ndarray) -> np.ndarray:
+        r""":math:`\sum_c 1_c 1_c^\top f`: each entry of ``f`` ((n,) or (n, k)) replaced by the
+        sum over its connected component."""
+        comp = self.components
+        S = sp.csr_matrix((np.ones(self.n), (np.arange(self.n), comp)), shape=(self.n, self.n_components))
+        return S @ (S.T @ f)
+
+    def component_volume(self) -> np.ndarray:
+        r"""(n,) the measure :math:`1_c^\top B 1_c` of each vertex's component."""
+        return np.bincount(self.components, weights=self.mass, minlength=self.n_components)[self.components]
 
     def project_out_kernel(self, f: np.ndarray) -> np.ndarray:
         r"""Remove from ``f`` its B-orthogonal projection onto ker L (constants per component).
@@ -88,6 +105,14 @@ class Laplacian:
             f"Laplacian(domain={self.domain!r}, n={self.n}, nnz(L)={self.L.nnz}, "
             f"components={self.n_components}, lumped={self.lumped})"
         )
+
+
+def as_laplacian(lap, name: str = "lap") -> Laplacian:
+    """Validate a Laplacian argument (every public entry point that takes one calls this)."""
+    if not isinstance(lap, Laplacian):
+        raise TypeError(f"{name} must be a spectral_igl.Laplacian (from sig.laplacian(V, F) or "
+                        f"another constructor), got {describe(lap)}")
+    return lap
 
 
 def _symmetrize(A: sp.spmatrix) -> sp.csr_matrix:

@@ -8,12 +8,12 @@ import scipy.sparse as sp
 
 from .._validate import as_cells, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import _MASSES, _clean_mesh, _mass, _star_adjacency
+from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
 
 try:  # compiled per-face kernel; the NumPy reference below computes the same (tested)
-    from .._assembly import anisotropic_faces as _faces_compiled
+    from ._assembly import anisotropic_faces as _faces_compiled
 except ImportError:  # pragma: no cover - source checkout without a build
     _faces_compiled = None
 
@@ -171,9 +171,9 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     PSD since every :math:`D_f` is symmetric positive definite.
     """
     alpha = as_nonnegative(alpha, "alpha")
-    if mass not in _MASSES:
-        raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, F, dropped, meas = _clean_mesh(V, F)
+    if mass not in MASSES:
+        raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
+    V, F, dropped, meas = clean_mesh_with_measures(V, F)
     if F.shape[1] != 3:
         raise ValueError(f"anisotropic_laplacian needs triangles, got F of shape {F.shape}")
     if V.shape[1] != 3:
@@ -190,7 +190,7 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
     r = np.repeat(F, 3, axis=1).ravel()
     c = np.tile(F, (1, 3)).ravel()
     L = sp.csr_matrix((K.ravel(), (r, c)), shape=(n, n))
-    B = _mass(V, F, mass, meas)
+    B = mass_matrix(V, F, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[F.ravel()] = True
     if not referenced.all():
@@ -201,4 +201,4 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     data = {"V": V, "F": F, "weights": "anisotropic", "mass": mass, "alpha": alpha,
             "kappa": kappa, "dirs": dirs, "referenced": referenced}
-    return make_laplacian(L, B, domain="triangle", data=data, adjacency=_star_adjacency(n, F))
+    return make_laplacian(L, B, domain="triangle", data=data, adjacency=star_adjacency(n, F))

@@ -9,10 +9,10 @@ import scipy.sparse as sp
 from .._validate import as_cells, as_points
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "element_measures", "mesh_components", "cotan_stiffness"]
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass", "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness"]
 
 _WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform")
-_MASSES = ("full", "lumped", "voronoi", "barycentric")
+MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -42,11 +42,11 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
     infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
     of elements removed. Raises ``ValueError`` if nothing is left.
     """
-    V, C, dropped, _ = _clean_mesh(V, C, rel_tol)
+    V, C, dropped, _ = clean_mesh_with_measures(V, C, rel_tol)
     return V, C, dropped
 
 
-def _clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
@@ -73,7 +73,7 @@ def mesh_components(n: int, C: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
-def _star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
+def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     """(n, n) pattern linking each element's first vertex to its others, one direction.
 
     Its connected components (as an undirected graph) are those of
@@ -111,7 +111,7 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
     return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
 
 
-def _full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> sp.csr_matrix:
+def full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> sp.csr_matrix:
     """Consistent linear-FEM mass: |e| (1 + δ_ij) / ((k)(k+1)) per element of k vertices."""
     k = C.shape[1]
     if meas is None:
@@ -125,15 +125,15 @@ def _full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> 
     return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
-def _mass(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
+def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
     import igl
 
     if mass == "full":
-        return _full_mass(V, C, meas)
+        return full_mass(V, C, meas)
     if mass in ("lumped", "voronoi") and C.shape[1] == 3:
         return igl.massmatrix(V, C, igl.MASSMATRIX_TYPE_VORONOI).tocsr()
     # barycentric: row sums of the consistent mass (the lumped mass of tets as well)
-    return sp.diags(np.asarray(_full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
+    return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
 
 def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
@@ -183,9 +183,9 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
     """
     if weights not in _WEIGHTS:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
-    if mass not in _MASSES:
-        raise ValueError(f"mass must be one of {_MASSES[:2] + _MASSES[3:]}, got {mass!r}")
-    V, C, dropped, meas = _clean_mesh(V, F)
+    if mass not in MASSES:
+        raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
+    V, C, dropped, meas = clean_mesh_with_measures(V, F)
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
@@ -195,7 +195,7 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
                       "using weights='cotan'", RuntimeWarning, stacklevel=2)
         weights = "cotan"
     L = cotan_stiffness(V, C, weights)
-    B = _mass(V, C, mass, meas)
+    B = mass_matrix(V, C, mass, meas)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
     n_unref = int(n - referenced.sum())
@@ -207,4 +207,4 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
     domain = "triangle" if C.shape[1] == 3 else "tet"
     key = "F" if domain == "triangle" else "T"
     data = {"V": V, key: C, "weights": weights, "mass": mass, "referenced": referenced}
-    return make_laplacian(L, B, domain=domain, data=data, adjacency=_star_adjacency(n, C))
+    return make_laplacian(L, B, domain=domain, data=data, adjacency=star_adjacency(n, C))

@@ -14,7 +14,7 @@ __all__ = ["point_cloud_laplacian", "tangent_voronoi_areas"]
 _METHODS = ("belkin", "liu")
 
 try:  # compiled clipping loop; _clip_cells below is its NumPy reference (tested equal)
-    from .._assembly import clip_cells as _clip_compiled
+    from ._assembly import clip_cells as _clip_compiled
 except ImportError:  # pragma: no cover - source checkout without a build
     _clip_compiled = None
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import _to_array, as_positive, describe
+from .._validate import as_array, as_positive, describe
 from ._operator import Laplacian, make_laplacian
 
 __all__ = ["voxel_laplacian"]
@@ -14,7 +14,7 @@ def _as_spacing(spacing) -> np.ndarray:
     if np.ndim(spacing) == 0:
         h = as_positive(spacing, "spacing")
         return np.full(3, h)
-    s = _to_array(spacing, "spacing")
+    s = as_array(spacing, "spacing")
     if s.shape != (3,) or s.dtype.kind not in "iuf":
         raise ValueError(f"spacing must be a positive number or 3 positive numbers, got {describe(s)}")
     return np.array([as_positive(x, f"spacing[{a}]") for a, x in enumerate(s.tolist())])
@@ -55,7 +55,7 @@ def voxel_laplacian(mask, spacing=1.0) -> Laplacian:
     >>> lap.n, round(lap.area(), 6)
     (24, 3.0)
     """
-    m = _to_array(mask, "mask")
+    m = as_array(mask, "mask")
     if m.dtype.kind == "b":
         pass
     elif m.dtype.kind in "iu" and np.all((m == 0) | (m == 1)):

@@ -10,6 +10,8 @@ import sys
 
 import numpy as np
 
+from .._validate import as_cells, as_points, describe
+
 INSTALL_HINT = 'pip install "spectral_igl[viz]"'
 
 # Colours of the survey: distances go from blue (minimum) to red (maximum); other
@@ -91,7 +93,6 @@ def to_pyvista(shape):
     kind : {"triangle", "tet", "points"}
     """
     pv = pyvista()
-    from .._validate import as_cells, as_points, describe
 
     if isinstance(shape, pv.DataSet):
         if isinstance(shape, pv.UnstructuredGrid):

@@ -120,7 +120,7 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
     >>> p = plot_levelsets((V, F), V[:, 2], kind="cyclic", filename="z.png")  # doctest: +SKIP
     """
     pv = pyvista()
-    _lines_over_surfaces()
+    lines_over_surfaces()
     shapes = shape if isinstance(shape, list) else [shape]
     fs = f if isinstance(f, list) else [f]
     if len(shapes) != len(fs):
@@ -150,7 +150,7 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
 
     def _range(mesh, mkind, fi):
         if mkind == "tet":  # range on the boundary, as in the survey's Fig. 8
-            surf = _surface(mesh)
+            surf = outer_surface(mesh)
             ids = surf.point_data.get("vtkOriginalPointIds")
             fi = fi[np.asarray(ids)] if ids is not None else fi
         fin = fi[np.isfinite(fi)]
@@ -220,7 +220,7 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         if camera_position is not None:
             plotter.camera_position = camera_position
         elif sources is not None and np.size(sources):
-            _look_at(plotter, mesh, int(np.atleast_1d(sources)[0]))
+            look_at(plotter, mesh, int(np.atleast_1d(sources)[0]))
         else:
             plotter.camera_position = "iso"
         plotter.reset_camera()
@@ -235,7 +235,7 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
     return plotter
 
 
-def _lines_over_surfaces():
+def lines_over_surfaces():
     """Draw iso-lines on top of the surface they lie on (no z-fighting).
 
     The contour lines are coincident with the triangles; VTK's polygon offset pushes the
@@ -247,7 +247,7 @@ def _lines_over_surfaces():
     vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
 
 
-def _look_at(plotter, mesh, vertex):
+def look_at(plotter, mesh, vertex):
     """Place the camera on the side of ``vertex``, slightly from above."""
     c = np.asarray(mesh.center, dtype=float)
     p = np.asarray(mesh.points[vertex], dtype=float)
@@ -262,7 +262,7 @@ def _look_at(plotter, mesh, vertex):
     plotter.camera_position = [tuple(c + 3.0 * mesh.length * d), tuple(c), tuple(up)]
 
 
-def _surface(grid):
+def outer_surface(grid):
     """Boundary surface of a volume, keeping ``vtkOriginalPointIds``."""
     import inspect
 
@@ -280,7 +280,7 @@ def _add_isolines(plotter, surface, iso, line_width):
 
 
 def _add_volume(plotter, pv, grid, iso, volume, common, line_width):
-    surf = _surface(grid)
+    surf = outer_surface(grid)
     center = np.asarray(grid.center)
     if volume == "boundary":
         plotter.add_mesh(surf, smooth_shading=True, **common)
@@ -293,7 +293,7 @@ def _add_volume(plotter, pv, grid, iso, volume, common, line_width):
         grid.point_data["_cut"] = np.minimum(P[:, 0] - center[0], P[:, 1] - center[1])
         inside = grid.clip_scalar(scalars="_cut", value=0.0, invert=True)
         inside.set_active_scalars("f")
-        shell = _surface(inside)
+        shell = outer_surface(inside)
         plotter.add_mesh(shell, **common)
         _add_isolines(plotter, shell, iso, line_width)
         return

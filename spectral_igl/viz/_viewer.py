@@ -3,13 +3,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import as_index
+from ..approx import METHODS
+from ..filters import FILTERS
+from ..laplacian import Laplacian, laplacian
+from ..quantity import QUANTITIES, evaluate
 from ._backend import colormap, headless, pyvista, save_png, to_pyvista
-from ._levelsets import levelset_values
-from ._quantity import FILTERS, QUANTITIES, evaluate
+from ._levelsets import levelset_values, lines_over_surfaces, look_at, outer_surface
 
 __all__ = ["Viewer"]
-
-METHODS = ("auto", "rational", "krylov", "chebyshev", "taylor", "euler", "eigen", "dense")
 
 
 class Viewer:
@@ -32,12 +34,12 @@ class Viewer:
         or a :class:`~spectral_igl.Laplacian` built from one.
     quantity : {"kernel", "distance"}
     filter : str
-        One of :data:`spectral_igl.viz._quantity.FILTERS` (``"heat"``, ``"diffusion"``,
+        One of :data:`spectral_igl.filters.FILTERS` (``"heat"``, ``"diffusion"``,
         ``"biharmonic"``, ...).
     t : float, optional
         Initial time; default :math:`10^{-2}` times the squared bounding-box diagonal.
     method : str
-        Engine method (``"auto"``, ``"rational"``, ``"krylov"``, ...).
+        Engine method, one of :data:`spectral_igl.approx.METHODS`.
     source : int
         Initial vertex.
     n_levels : int
@@ -58,10 +60,7 @@ class Viewer:
                  source=0, n_levels=12, tol=1e-8, off_screen=None, window_size=(900, 800),
                  weights="cotan", diagonal="auto"):
         pv = pyvista()
-        from .. import Laplacian, laplacian
-        from ._levelsets import _lines_over_surfaces
-
-        _lines_over_surfaces()
+        lines_over_surfaces()
 
         if quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
@@ -77,9 +76,8 @@ class Viewer:
         if kind == "points":
             raise ValueError("the viewer draws triangle and tetrahedral meshes")
         if kind == "tet":
-            from ._levelsets import _surface
 
-            surface = _surface(grid)
+            surface = outer_surface(grid)
             self._ids = np.asarray(surface.point_data["vtkOriginalPointIds"], dtype=np.int64)
         else:
             surface = grid
@@ -110,15 +108,13 @@ class Viewer:
         self._kdtree = None
         self._add_widgets()
         self.update()
-        from ._levelsets import _look_at
 
-        _look_at(self.plotter, grid, self.source)
+        look_at(self.plotter, grid, self.source)
         self.plotter.reset_camera()
 
     # ---- interactions -------------------------------------------------------------
     def on_pick(self, vertex):
         """Evaluate from ``vertex`` (an index into the mesh vertices) and redraw."""
-        from .._validate import as_index
 
         self.source = as_index(vertex, self.lap.n, "vertex")
         return self.update()

@@ -1,11 +1,10 @@
 """Shifted factorizations and pseudo-inverse solves against dense linear algebra."""
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 import spectral_igl as sig
 from data_generators import icosphere
-from spectral_igl import solvers
+from spectral_igl import linalg as solvers
 
 
 def two_spheres():

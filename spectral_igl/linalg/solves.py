@@ -3,7 +3,7 @@ r"""Cached sparse factorizations of the shifted matrices :math:`\theta B + \beta
 Every spectrum-free method reduces to solves with matrices shaped like the mesh:
 :math:`B + \beta L` (real shifts, symmetric positive definite: Cholesky), :math:`tL - \theta B`
 (complex poles: one complex symmetric LDLᵀ per conjugate pair), :math:`B` itself, and the grounded
-stiffness for pseudo-inverses. The factorizations live in ``lap.cache`` so that repeated
+stiffness for pseudo-inverses. The factorizations live in ``lap.cache`` (slot ``"factor"``) so that repeated
 calls on one shape -- other right-hand sides, other filters with the same poles -- never
 refactor.
 
@@ -15,32 +15,24 @@ gives selected inverses), SuperLU for indefinite matrices and as the fallback.
 from __future__ import annotations
 
 import numbers
-from collections import OrderedDict
 
 import numpy as np
 import scipy.sparse as sp
 
-from . import _selinv
-from ._factor import available_backends, factorize
-from ._validate import as_signal, describe
-from .laplacian import Laplacian
+from .._validate import as_signal, describe
+from ..laplacian import Laplacian, as_laplacian, lambda_max
+from . import ldlt
+from .factor import available_backends, factorize
 
-__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "clear_cache", "max_cached_factors"]
-
-#: At most this many shifted factorizations are kept per Laplacian (least recently used first out).
-max_cached_factors = 24
+__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "grounded_vertices", "grounded_factor",
+           "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache"]
 
 
-def _check_lap(lap) -> Laplacian:
-    if not isinstance(lap, Laplacian):
-        raise TypeError(f"expected a spectral_igl.Laplacian, got {describe(lap)}")
-    return lap
-
-
-def _check_backend(backend: str) -> str:
+def check_backend(backend) -> str:
+    """Validate a sparse-solver backend name against those importable here."""
     valid = ("auto",) + tuple(available_backends())
-    if backend not in valid:
-        raise ValueError(f"backend must be one of {valid}, got {backend!r}")
+    if not isinstance(backend, str) or backend not in valid:
+        raise ValueError(f"backend must be one of {valid}, got {describe(backend)}")
     return backend
 
 
@@ -51,20 +43,21 @@ def _ldlt_safe(lap: Laplacian, beta, theta) -> bool:
     def definite(t, b):
         if t == 0 or t * b >= 0:
             return t != 0
-        from .approx._common import lambda_max
-
         return abs(t) > abs(b) * lambda_max(lap)
 
     beta, theta = complex(beta), complex(theta)
     return definite(theta.real, beta.real) or definite(theta.imag, beta.imag)
 
 
-def ldlt_pattern(lap: Laplacian):
+def ldlt_pattern(lap: Laplacian) -> ldlt.Pattern:
     """The ordering and symbolic LDLᵀ analysis of the pattern of L + B, cached on ``lap``."""
-    pat = lap.cache.get("ldlt_pattern")
-    if pat is None:
-        pat = lap.cache["ldlt_pattern"] = _selinv.Pattern(abs(lap.L) + abs(lap.B))
-    return pat
+    lap = as_laplacian(lap)
+    return lap.cache.fetch("pattern", "L+B", lambda: ldlt.Pattern(abs(lap.L) + abs(lap.B)))
+
+
+def ldlt_factor(lap: Laplacian, A) -> ldlt.LDLT:
+    """LDLᵀ of a matrix with the sparsity pattern of L + B (or a part of it), on the cached analysis."""
+    return ldlt.LDLT(A, ldlt_pattern(lap))
 
 
 def _scalar(x, name):
@@ -98,48 +91,38 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     >>> import numpy as np, spectral_igl as sig
     >>> from data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
-    >>> fac = sig.solvers.shifted_factor(lap, 0.1)
+    >>> fac = sig.linalg.shifted_factor(lap, 0.1)
     >>> x = fac.solve(lap.B @ np.ones(lap.n))
     >>> bool(np.allclose(x, 1.0))
     True
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     beta, theta = _scalar(beta, "beta"), _scalar(theta, "theta")
-    backend = _check_backend(backend)
+    backend = check_backend(backend)
     cplx = isinstance(beta, complex) or isinstance(theta, complex)
     spd = (not cplx) and theta > 0 and beta >= 0
-    if cplx and backend == "auto" and _selinv.available() and _ldlt_safe(lap, beta, theta):
+    if cplx and backend == "auto" and ldlt.available() and _ldlt_safe(lap, beta, theta):
         backend = "ldlt"
-    key = ("shifted", beta, theta, backend)
-    cache = lap.cache.setdefault("factors", OrderedDict())
-    fac = cache.get(key)
-    if fac is not None:
-        cache.move_to_end(key)
-        return fac
-    if backend == "ldlt":
-        if not _ldlt_safe(lap, beta, theta):
-            raise ValueError(f"backend 'ldlt' needs a definite real or imaginary part, got "
-                             f"beta={beta}, theta={theta}")
-        dt = np.complex128 if cplx else np.float64
-        fac = _selinv.LDLT((theta * lap.B.astype(dt) + beta * lap.L.astype(dt)).tocsr(), ldlt_pattern(lap))
-    elif cplx:
-        A = (theta * lap.B.astype(np.complex128) + beta * lap.L.astype(np.complex128)).tocsr()
-        fac = factorize(A, backend="superlu", spd=False)
-    else:
+
+    def build():
+        if backend == "ldlt":
+            if not _ldlt_safe(lap, beta, theta):
+                raise ValueError(f"backend 'ldlt' needs a definite real or imaginary part, got "
+                                 f"beta={beta}, theta={theta}")
+            dt = np.complex128 if cplx else np.float64
+            return ldlt_factor(lap, (theta * lap.B.astype(dt) + beta * lap.L.astype(dt)).tocsr())
+        if cplx:
+            A = (theta * lap.B.astype(np.complex128) + beta * lap.L.astype(np.complex128)).tocsr()
+            return factorize(A, backend="superlu", spd=False)
         A = (theta * lap.B + beta * lap.L).tocsr()
-        if spd:
-            fac = factorize(A, backend=backend, spd=True)
-        else:
-            fac = factorize(A, backend="superlu", spd=False)
-    cache[key] = fac
-    while len(cache) > max_cached_factors:
-        cache.popitem(last=False)
-    return fac
+        return factorize(A, backend=backend, spd=True) if spd else factorize(A, backend="superlu", spd=False)
+
+    return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
 
 
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
     r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise)."""
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     if lap.lumped:
         d = lap.B.diagonal()
         return g / (d if g.ndim == 1 else d[:, None])
@@ -149,6 +132,7 @@ def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarr
 def grounded_vertices(lap: Laplacian) -> np.ndarray:
     """(n,) bool: one vertex per component, the one of largest stiffness diagonal (best pivot),
     whose row and column are removed to make L definite."""
+    lap = as_laplacian(lap)
     comp = lap.components
     order = np.lexsort((-lap.L.diagonal(), comp))
     first = np.ones(order.size, dtype=bool)
@@ -158,20 +142,27 @@ def grounded_vertices(lap: Laplacian) -> np.ndarray:
     return grounded
 
 
-def _grounded(lap: Laplacian, backend: str = "auto"):
-    """Factor of L with one vertex per component removed (SPD), and the kept indices."""
-    key = ("grounded", backend)
-    g = lap.cache.get(key)
-    if g is not None:
-        return g
-    keep = np.flatnonzero(~grounded_vertices(lap))
-    fac = None
-    if keep.size:
-        Lr = lap.L[keep][:, keep].tocsr()
-        fac = factorize(Lr, backend=backend, spd=True)
-    g = (fac, keep)
-    lap.cache[key] = g
-    return g
+def grounded_factor(lap: Laplacian, backend: str = "auto"):
+    """The one grounded stiffness of ``lap``, factorized once: ``(factor, L_g, grounded)``.
+
+    ``L_g`` is L with the row and column of each :func:`grounded_vertices` vertex replaced by
+    those of the identity: symmetric positive definite, and its inverse with zeros at the
+    grounded vertices is the grounded pseudo-inverse X of L. ``backend="auto"`` uses the
+    package's LDLᵀ (which also gives diag(X) by selected inversion) where it is built.
+    """
+    lap = as_laplacian(lap)
+    backend = check_backend(backend)
+    if backend == "auto":
+        backend = "ldlt" if ldlt.available() else "auto"
+
+    def build():
+        grounded = grounded_vertices(lap)
+        keep = sp.diags((~grounded).astype(float))
+        Lg = (keep @ lap.L @ keep + sp.diags(grounded.astype(float))).tocsr()
+        fac = ldlt_factor(lap, Lg) if backend == "ldlt" else factorize(Lg, backend=backend, spd=True)
+        return fac, Lg, grounded
+
+    return lap.cache.fetch("factor", ("grounded", backend), build)
 
 
 def pseudo_solve(lap: Laplacian, g, backend: str = "auto") -> np.ndarray:
@@ -180,8 +171,8 @@ def pseudo_solve(lap: Laplacian, g, backend: str = "auto") -> np.ndarray:
     ``Z`` is the B-orthonormal basis of ker L (one indicator per component). With
     ``g = B f`` this is :math:`u = \tilde L^{+} f`, the pseudo-inverse of the Laplacian:
     the biharmonic filter :math:`s^{-1}` exactly, with no regularisation. Each component
-    is grounded at one vertex (the reduced stiffness is positive definite and factorized
-    once, cached), then the solution is B-projected onto the complement of ker L.
+    is grounded at one vertex (:func:`grounded_factor`, factorized once and cached), then
+    the solution is B-projected onto the complement of ker L.
 
     Parameters
     ----------
@@ -192,22 +183,17 @@ def pseudo_solve(lap: Laplacian, g, backend: str = "auto") -> np.ndarray:
     -------
     u : same shape as ``g``
     """
-    lap = _check_lap(lap)
+    lap = as_laplacian(lap)
     g = as_signal(g, lap.n, "g")
     Z = lap.component_basis()
     rhs = g - lap.B @ (Z @ (Z.T @ g))
-    fac, keep = _grounded(lap, backend)
-    u = np.zeros_like(rhs)
-    if fac is not None:
-        u[keep] = fac.solve(rhs[keep])
+    fac, _, grounded = grounded_factor(lap, backend)
+    rhs[grounded] = 0.0
+    u = fac.solve(rhs)
+    u[grounded] = 0.0
     return lap.project_out_kernel(u)
 
 
 def clear_cache(lap: Laplacian) -> None:
-    """Drop every factorization cached on ``lap`` (e.g. to free memory)."""
-    lap = _check_lap(lap)
-    for key in list(lap.cache):
-        if key == "factors" or (isinstance(key, tuple) and key and key[0] == "grounded"):
-            del lap.cache[key]
-
-
+    """Drop everything cached on ``lap`` (the same as ``lap.cache.clear()``)."""
+    as_laplacian(lap).cache.clear()

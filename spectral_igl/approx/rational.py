@@ -18,7 +18,7 @@ one sparse solve per pole (one complex solve per conjugate pair), and for a kern
   :math:`[a, \lambda_{\max}]`, turned into partial fractions.
 
 The error bound is :math:`\max_{s \in [a, \lambda_{\max}]} |\varphi(s) - r(s)|\,\|f\|_B`,
-certified by :func:`._common.sup_error` with the exact derivative bound of the partial
+certified by :func:`.common.sup_error` with the exact derivative bound of the partial
 fractions, plus a rounding term for the solves.
 """
 from __future__ import annotations
@@ -28,8 +28,9 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg as sla
 
-from .. import solvers
-from ._common import EPS, sup_error
+from ..filters import commute_time
+from ..linalg import mass_solve, pseudo_solve, shifted_factor
+from .common import EPS, bnorm, inv_bnorm_upper, sup_error
 
 
 # ----------------------------------------------------------------------------- CF for exp
@@ -177,19 +178,19 @@ class PartialFractions:
         out = np.zeros(f.shape, dtype=float if real_out else complex)
         for c, z, k in self.terms:
             theta = -z.real if z.imag == 0 else -z
-            x = solvers.shifted_factor(lap, self.sigma, theta, backend=backend).solve(g)
+            x = shifted_factor(lap, self.sigma, theta, backend=backend).solve(g)
             if k == 2 and real_out:
                 out += 2.0 * (c * x).real
             elif k == 2 and np.isrealobj(g):
                 # (σL - z̄B)⁻¹ g = conj((σL - zB)⁻¹ g) for real g
                 out += c * x + np.conj(c) * np.conj(x)
             elif k == 2:
-                x2 = solvers.shifted_factor(lap, self.sigma, -np.conj(z), backend=backend).solve(g)
+                x2 = shifted_factor(lap, self.sigma, -np.conj(z), backend=backend).solve(g)
                 out += c * x + np.conj(c) * x2
             else:
                 out += (c * x).real if real_out else c * x
         if with_alpha0 and self.alpha0 != 0:
-            base = solvers.mass_solve(lap, f, backend=backend) if rhs else f
+            base = mass_solve(lap, f, backend=backend) if rhs else f
             out += self.alpha0.real * base if real_out else self.alpha0 * base
         return out
 
@@ -242,8 +243,9 @@ def aaa_fit(fn, a: float, b: float, rtol: float = 1e-13, max_terms: int = 100, i
     [a, b]); residues and the constant are refitted by least squares with the poles fixed
     (conjugate-symmetric for a real function).
     """
-    from scipy.interpolate import AAA
     import warnings
+
+    from scipy.interpolate import AAA
 
     lo = a if a > 0 else b * 1e-12
     x = np.unique(np.concatenate([np.linspace(a, b, 1000), np.geomspace(lo, b, 1500), [a, b]]))
@@ -301,8 +303,6 @@ class RationalPlan:
             if half > 1e-12:
                 if abs(half - 0.5) > 1e-12:
                     raise ValueError(f"power filters need p = k/2, got p = {p}")
-                from ..filters import commute_time
-
                 root = commute_time()
                 pf = aaa_fit(root, a, b, rtol=1e-13)
                 if pf is None:
@@ -327,8 +327,6 @@ class RationalPlan:
         :math:`\|r\|_{B^{-1}} / \lambda_{\min}^+` with the residual :math:`r = Lu - Pg`, plus
         the rounding of computing r itself (:math:`\varepsilon(\lambda_{\max}\|u\|_B + \|g\|_{B^{-1}})`).
         """
-        from ._common import bnorm, inv_bnorm_upper
-
         lap = self.lap
         Z = lap.component_basis()
         r = lap.L @ u - (g - lap.B @ (Z @ (Z.T @ g)))
@@ -346,7 +344,7 @@ class RationalPlan:
             res_bound = np.zeros(f.shape[1:]) if f.ndim == 2 else np.zeros(())
             for k in range(self.pseudo):
                 rhs_k = u if (rhs and k == 0) else lap.B @ u
-                u = solvers.pseudo_solve(lap, rhs_k, backend=self.backend)
+                u = pseudo_solve(lap, rhs_k, backend=self.backend)
                 res_bound = res_bound / self.a + self._solve_bound(u, rhs_k)
             self.residual_bound = res_bound
             return u, src, 0.0
@@ -366,7 +364,7 @@ class RationalPlan:
         res_bound = 0.0
         for _ in range(self.pseudo):
             g = lap.B @ u
-            u = solvers.pseudo_solve(lap, g, backend=self.backend)
+            u = pseudo_solve(lap, g, backend=self.backend)
             res_bound = res_bound / self.a + self._solve_bound(u, g)
         self.residual_bound = res_bound
         # the rational error is amplified by ||(L̃⁺)^m|| <= a^-m

@@ -11,21 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import EPS
-
-
-def _pairs(lap, k):
-    key = ("eigs", k)
-    if key not in lap.cache:
-        if k is None:
-            from ..laplacian import dense_eigs
-
-            lap.cache[key] = dense_eigs(lap)
-        else:
-            from ..laplacian import eigs
-
-            lap.cache[key] = eigs(lap, k)
-    return lap.cache[key]
+from ..linalg import cached_eigs as _pairs
+from .common import EPS
 
 
 class DensePlan:

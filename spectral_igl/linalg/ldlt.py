@@ -16,11 +16,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["Pattern", "LDLT", "available"]
+__all__ = ["Pattern", "LDLT", "available", "nested_dissection"]
 
 
 def _ext():
-    from . import _ldlt as ext   # the compiled module, built with the package
+    from . import (
+        _ldlt as ext,  # the compiled half of this module, built with the package
+    )
 
     return ext
 
@@ -79,7 +81,13 @@ class Pattern:
 
     @property
     def nnz_L(self) -> int:
+        """Entries stored in the factor L (supernodal, lower triangle)."""
         return int(self.symbolic.nnz_L)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the ordering and the pattern's index arrays."""
+        return int(self.indptr.nbytes + self.indices.nbytes + self._keys.nbytes)
 
     def values(self, A) -> np.ndarray:
         """The entries of ``A`` in this pattern's order (entries outside it are refused)."""
@@ -118,6 +126,7 @@ class LDLT:
         except RuntimeError as exc:   # a zero pivot: the matrix is singular or needs pivoting
             raise ValueError(f"LDLT failed: {exc}") from None
         self.n = A.shape[0]
+        self.nbytes = int(self.pattern.nnz_L * np.dtype(self.dtype).itemsize)
 
     def solve(self, b) -> np.ndarray:
         b = np.asarray(b)

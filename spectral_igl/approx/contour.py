@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import sup_error
-from ._rational import PartialFractions, rounding
+from .common import sup_error
+from .rational import PartialFractions, rounding
 
 
 def talbot(N: int):

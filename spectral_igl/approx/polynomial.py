@@ -11,12 +11,12 @@ import math
 
 import numpy as np
 
-from .. import solvers
-from ._common import EPS, cheb_adaptive, sup_error, tail_sums
+from ..linalg import mass_solve, shifted_factor
+from .common import EPS, cheb_adaptive, sup_error, tail_sums
 
 
 def _ltilde(lap, v, backend):
-    return solvers.mass_solve(lap, lap.L @ v, backend=backend)
+    return mass_solve(lap, lap.L @ v, backend=backend)
 
 
 class ChebyshevPlan:
@@ -50,7 +50,7 @@ class ChebyshevPlan:
     def apply(self, f, rhs):
         lap, a, b = self.lap, self.a, self.b
         if rhs:
-            f = solvers.mass_solve(lap, f, backend=self.backend)
+            f = mass_solve(lap, f, backend=self.backend)
         al, be = 2.0 / (b - a), -(a + b) / (b - a)
 
         def X(v):
@@ -132,7 +132,7 @@ class TaylorPlan:
 
     def apply(self, f, rhs):
         if rhs:
-            f = solvers.mass_solve(self.lap, f, backend=self.backend)
+            f = mass_solve(self.lap, f, backend=self.backend)
         g = f
         out = self.coef[0] * f
         for k in range(1, self.m + 1):
@@ -161,7 +161,7 @@ class EulerPlan:
         self.n_solves = m
 
     def apply(self, f, rhs):
-        fac = solvers.shifted_factor(self.lap, self.t / self.m, 1.0, backend=self.backend)
+        fac = shifted_factor(self.lap, self.t / self.m, 1.0, backend=self.backend)
         g = f
         for k in range(self.m):
             g = fac.solve(g if (rhs and k == 0) else self.lap.B @ g)
@@ -181,7 +181,7 @@ class Taylor1Plan:
 
     def apply(self, f, rhs):
         if rhs:
-            f = solvers.mass_solve(self.lap, f, backend=self.backend)
+            f = mass_solve(self.lap, f, backend=self.backend)
         return f - self.t * _ltilde(self.lap, f, self.backend), f, self.scalar_error + self.rounding
 
 
@@ -229,7 +229,7 @@ class PowerPlan:
 
     def apply(self, f, rhs):
         if rhs:
-            f = solvers.mass_solve(self.lap, f, backend=self.backend)
+            f = mass_solve(self.lap, f, backend=self.backend)
         h = -self.t / 2 ** self.j
         u = f
         for _ in range(2 ** self.j):

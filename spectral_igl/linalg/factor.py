@@ -4,18 +4,27 @@
 Real symmetric positive definite matrices go to CHOLMOD (through cholespy) by
 default, to MKL PARDISO (pypardiso) when asked, and to SuperLU as the fallback;
 complex matrices to SuperLU. ``"ldlt"`` is the package's own supernodal LDLᵀ without
-pivoting (:mod:`spectral_igl._selinv`), for definite real or complex symmetric matrices;
+pivoting (:mod:`spectral_igl.linalg.ldlt`), for definite real or complex symmetric matrices;
 it also gives the diagonal of the inverse.
 """
 from __future__ import annotations
 
 import importlib.util
+import logging
+import time
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["factorize", "available_backends", "Factor"]
+from . import ldlt
+
+__all__ = ["factorize", "available_backends", "Factor", "BACKENDS"]
+
+log = logging.getLogger(__name__)
+
+#: every backend name, best first (``available_backends()`` lists those importable here)
+BACKENDS = ("cholespy", "pypardiso", "ldlt", "superlu")
 
 
 def available_backends() -> list[str]:
@@ -25,9 +34,7 @@ def available_backends() -> list[str]:
         out.append("cholespy")
     if importlib.util.find_spec("pypardiso") is not None:
         out.append("pypardiso")
-    from . import _selinv
-
-    if _selinv.available():
+    if ldlt.available():
         out.append("ldlt")
     out.append("superlu")
     return out
@@ -46,12 +53,13 @@ class Factor:
         if backend == "auto":
             backend = "cholespy" if (spd and self.dtype == np.float64
                                      and "cholespy" in available_backends()) else "superlu"
-        if backend not in ("cholespy", "pypardiso", "ldlt", "superlu"):
-            raise ValueError(f"backend must be 'auto', 'cholespy', 'pypardiso', 'ldlt' or 'superlu', "
-                             f"got {backend!r}")
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be 'auto' or one of {BACKENDS}, got {backend!r}")
         if backend not in ("superlu", "ldlt") and self.dtype != np.float64:
             backend = "superlu"
         self.backend = backend
+        start = time.perf_counter()
+        self.nbytes = 0
         if backend == "cholespy":
             from cholespy import CholeskySolverD, MatrixType
 
@@ -59,10 +67,12 @@ class Factor:
             A.sort_indices()
             self._chol = CholeskySolverD(n, A.indptr.astype(np.int32), A.indices.astype(np.int32),
                                          A.data.astype(np.float64), MatrixType.CSR)
+            # CHOLMOD does not report its factor's size: the lower triangle of A times the
+            # fill of a nested-dissection factor on a surface mesh (about 10) is an estimate
+            self.nbytes = int(12 * 10 * (A.nnz + n) // 2)
         elif backend == "ldlt":
-            from ._selinv import LDLT
-
-            self._ldlt = LDLT(A)
+            self._ldlt = ldlt.LDLT(A)
+            self.nbytes = self._ldlt.nbytes
         elif backend == "pypardiso":
             import pypardiso
 
@@ -71,6 +81,8 @@ class Factor:
             self._pardiso.factorize(self._A)
         else:
             self._lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A" if spd else "COLAMD")
+            self.nbytes = int((self._lu.L.nnz + self._lu.U.nnz) * (np.dtype(self.dtype).itemsize + 4))
+        log.info("factorized n=%d nnz=%d with %s in %.3f s", n, A.nnz, backend, time.perf_counter() - start)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """Solve ``A x = b`` for b of shape (n,) or (n, k)."""

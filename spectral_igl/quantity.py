@@ -1,6 +1,8 @@
 """One place that turns (quantity, filter, t, method, source) into values on the vertices.
 
-Used by the command line and the interactive viewer. Only numpy at import time.
+Used by the command line and the interactive viewer; the names it accepts come from the
+registries :data:`spectral_igl.filters.FILTERS`, :data:`spectral_igl.approx.METHODS` and
+:data:`spectral_igl.diagonal.METHODS`.
 """
 from __future__ import annotations
 
@@ -8,50 +10,15 @@ import time
 
 import numpy as np
 
-__all__ = ["FILTERS", "QUANTITIES", "make_filter", "evaluate", "Evaluation"]
+from ._validate import as_index
+from .approx import spectral_operator
+from .distances import spectral_distance
+from .filters import FILTERS, by_name
 
-#: filter name -> whether it takes a time/scale parameter t
-FILTERS = {
-    "heat": True,
-    "diffusion": True,
-    "wave": True,
-    "mexican_hat": True,
-    "commute_time": False,
-    "biharmonic": False,
-    "polyharmonic": False,
-}
+__all__ = ["QUANTITIES", "evaluate", "Evaluation"]
+
+#: what :func:`evaluate` computes
 QUANTITIES = ("kernel", "distance")
-
-
-def make_filter(name: str, t: float | None = None, order: int = 3):
-    """The :mod:`spectral_igl.filters` object called ``name``.
-
-    ``"diffusion"`` is the heat filter at ``t / 2``: its square ``e^{-ts}`` defines the
-    diffusion distance at time ``t``.
-    """
-    from .. import filters
-
-    if name not in FILTERS:
-        raise ValueError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
-    if FILTERS[name]:
-        if t is None:
-            raise ValueError(f"filter {name!r} needs a time t")
-        t = float(t)
-        if not np.isfinite(t) or t <= 0:
-            raise ValueError(f"t must be a positive number, got {t!r}")
-    if name == "heat":
-        return filters.heat(t)
-    if name == "diffusion":
-        return filters.heat(t / 2.0)
-    if name == "wave":
-        return filters.wave(t)
-    if name == "mexican_hat":
-        return filters.mexican_hat(t)
-    if name == "commute_time":
-        return filters.commute_time()
-    if name == "biharmonic":
-        return filters.biharmonic()
-    return filters.polyharmonic(int(order))
 
 
 class Evaluation:
@@ -89,12 +56,13 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     source : int
         Vertex ``i``.
     filter : str
-        A name in :data:`FILTERS`.
+        A name in :data:`spectral_igl.filters.FILTERS`.
     t : float, optional
         Time/scale of the filters that take one.
     method, tol
         Passed to the spectrum-free engine.
-    diagonal : {"auto", "selinv", "exact", "probing", "dense"}
+    diagonal : str
+        One of :data:`spectral_igl.diagonal.METHODS`.
         How a one-to-all distance obtains the kernel diagonal
         (:func:`spectral_igl.spectral_distance`).
 
@@ -106,32 +74,26 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
         ``seconds``.
     """
-    from .._validate import as_index
-
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     source = as_index(source, lap.n, "source")
-    filt = make_filter(filter, t, order)
-    label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter] else "")
+    filt = by_name(filter, t, order)
+    label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter][1] else "")
     start = time.perf_counter()
     if quantity == "kernel":
-        from .. import SpectralOperator
-
-        op = SpectralOperator(lap, filt, method=method, tol=tol)
+        op = spectral_operator(lap, filt, method=method, tol=tol)
         e = np.zeros(lap.n)
         e[source] = 1.0
         values = op.apply_inverse_mass(e)
         bound = _bound(op.error_bound)
         values = np.real(values) if np.iscomplexobj(values) else values
     else:
-        from .. import spectral_distance
-
-        values, bound = _distance(spectral_distance, lap, filt, source, method, tol, diagonal)
+        values, bound = _distance(lap, filt, source, method, tol, diagonal)
     seconds = time.perf_counter() - start
     return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label)
 
 
-def _distance(spectral_distance, lap, filt, source, method, tol, diagonal="auto"):
+def _distance(lap, filt, source, method, tol, diagonal="auto"):
     """Distances from ``source`` and a bound on each |d - d~| (``None`` when there is none).
 
     For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``

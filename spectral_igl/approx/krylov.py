@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from .. import solvers
-from ._common import EPS, cheb_adaptive, tail_sums
+from ..linalg import mass_solve, shifted_factor
+from .common import EPS, cheb_adaptive, tail_sums
 
 
 def _cheb_steps(g, lo, hi, tol, max_steps):
@@ -123,11 +123,11 @@ class KrylovPlan:
     def apply(self, f, rhs):
         lap = self.lap
         if rhs:
-            f = solvers.mass_solve(lap, f, backend=self.backend)
+            f = mass_solve(lap, f, backend=self.backend)
         F = f.reshape(f.shape[0], -1)
 
         def op(v):
-            return solvers.mass_solve(lap, lap.L @ v, backend=self.backend)
+            return mass_solve(lap, lap.L @ v, backend=self.backend)
 
         al, be, Q, b0, me = lanczos(op, F, lap.B @ F, self.m, lap)
         out = lanczos_eval(self.filt, al, be, Q, b0, me, self.a, self.b,
@@ -188,7 +188,7 @@ class ShiftInvertPlan:
 
     def apply(self, f, rhs):
         lap = self.lap
-        fac = solvers.shifted_factor(lap, self.gamma, 1.0, backend=self.backend)
+        fac = shifted_factor(lap, self.gamma, 1.0, backend=self.backend)
         F = f.reshape(f.shape[0], -1)
 
         def op(v):

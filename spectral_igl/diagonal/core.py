@@ -1,0 +1,218 @@
+r"""The diagonal of a spectral kernel :math:`G = \varphi(\tilde L)B^{-1}` at every vertex.
+
+One-to-all spectral distances and the descriptors (HKS, WKS, ADF, eccentricity) need
+:math:`G_{ii}` at all n vertices. The kernel is dense, so its diagonal is not a by-product
+of any single solve. Methods:
+
+``"exact"``
+    n applications of the engine (in blocks): exact up to the engine's certified bound.
+    For small and moderate n.
+``"dense"``
+    Dense generalized eigen-decomposition (n <= 8000): the ground truth. The
+    decomposition is cached on the Laplacian, so further filters and times cost one
+    matrix product each. ``"auto"`` uses it for n <= 3000 when ``"selinv"`` does not
+    apply (n = 2562: 18 s once, against 37 s per filter for ``"exact"``).
+``"eigen"``
+    Truncated eigen-expansion with the ``k`` lowest eigenpairs: the classical baseline.
+    No error bound; wrong by the whole omitted tail of the spectrum.
+``"selinv"``
+    Spectrum-free and exact up to a certified rational error: a partial-fraction
+    approximation :math:`r(s) = \alpha_0 + \sum_j c_j/(\sigma s - z_j)` of the filter turns
+    the diagonal into :math:`\alpha_0\,\mathrm{diag}(B^{-1}) + \sum_j c_j\,
+    \mathrm{diag}((\sigma L - z_j B)^{-1})`, and the diagonal of each inverse comes from its
+    sparse LDLᵀ factor by selected inversion (no column of the inverse is formed). The heat
+    filter uses the Carathéodory--Fejér approximant, other filters an AAA fit. The
+    commute-time kernel (:math:`s^{-1}`) is exact: :math:`G = QXQ^\top` with X the inverse of
+    the grounded stiffness and :math:`Q = I - 1w^\top` the B-orthogonal projector off ker L;
+    the biharmonic kernel (:math:`s^{-2}`) is exact too, :math:`G_c B G_c`, with
+    :math:`\mathrm{diag}(XBX)` the complex-step derivative of
+    :math:`\mathrm{diag}((L_g - zB)^{-1})` at z = 0 (one complex factorization). Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
+    :math:`\varepsilon = \max|\varphi - r|` on the spectrum (reported as
+    ``abs_error_bound``), and the error is also measured at ``samples`` vertices.
+``"probing"``
+    Spectrum-free estimator: probing vectors built from a distance-``D`` colouring of
+    the mesh graph (two vertices of one colour are more than ``D`` edges apart), so that
+    :math:`(G z_c)_i = G_{ii} + \sum_{j \in c, j \ne i} G_{ij}` and the far entries
+    :math:`G_{ij}` are the error; the slowly-decaying low-frequency part of the kernel is
+    optionally removed exactly with ``k`` low eigenpairs (deflation). Its accuracy is
+    *measured* and reported: the exact diagonal is computed at ``samples`` random
+    vertices and compared (those entries are then exact in the output).
+"""
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from .._validate import as_delta
+from ..approx import spectral_operator
+from ..filters import check_filter
+from ..laplacian import as_laplacian
+from .probing import probing_diagonal
+from .selinv import NoSelinv, selinv_kernel, selinv_supported
+from .spectral import eigen_diagonal
+
+__all__ = ["kernel_diagonal", "METHODS", "EXACT_MAX"]
+
+log = logging.getLogger(__name__)
+
+#: The diagonal methods, read by the distances, the command line and the viewer.
+METHODS = ("auto", "exact", "dense", "eigen", "selinv", "probing")
+#: ``auto`` uses the (cached) dense eigendecomposition up to this many vertices where
+#: ``"selinv"`` does not apply
+EXACT_MAX = 3000
+#: columns per engine call in ``"exact"`` and ``"probing"``
+BLOCK = 64
+
+
+def _gram_apply(lap, op, delta):
+    """Z -> G Z for G = phi(L~) B^-1 (mass) or B phi(L~) (seed)."""
+    if delta == "mass":
+        return op.apply_inverse_mass
+    return lambda Z: lap.B @ op.apply(Z)
+
+
+def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int | None = None,
+                    distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
+                    max_colours: int | None = None, tol: float = 1e-8,
+                    engine_method: str = "auto", seed: int = 0, return_info: bool = False):
+    r"""Diagonal of the spectral kernel :math:`G = \varphi(\tilde L)B^{-1}` at every vertex.
+
+    .. math:: G_{ii} = \sum_l \varphi(\lambda_l)\, x_l(i)^2
+
+    Parameters
+    ----------
+    lap : Laplacian
+    filt : Filter
+        The filter whose kernel diagonal is wanted (for spectral distances pass
+        :math:`|\varphi|^2`, ``filt.square``).
+    method : {"auto", "exact", "dense", "selinv", "probing", "eigen"}
+        See the module notes. ``"auto"``: ``"selinv"``; where it does not apply (a complex
+        filter, ``delta="seed"`` with a full mass matrix, a fit with poles near 0 such as
+        :math:`s^{-3}`), ``"dense"`` (cached) for ``n <= 3000``, else ``"probing"``.
+    delta : {"mass", "seed"}
+        ``"seed"`` gives the diagonal of :math:`B\varphi(\tilde L)` (the seed-delta Gram
+        matrix).
+    k : int, optional
+        Eigenpairs: the truncation of ``"eigen"`` (default 100), the deflation rank of
+        ``"probing"`` (0: no deflation). ``"probing"`` chooses it when not given: 0 if
+        the kernel decays fast enough for ``rtol``, else the better of 0 and 100.
+    distance : int, optional
+        Colouring distance of ``"probing"`` (graph rings). Chosen when not given: the
+        smallest distance whose error, predicted from the decay of the exact sample
+        columns with graph distance, is below ``rtol`` within ``max_colours`` colours
+        (else the most accurate one within the budget).
+    samples : int
+        ``"probing"``: vertices at which the exact kernel column is computed; they set
+        the choices above and measure the error (reported in ``info``), and are exact
+        in the output. At least 1 unless both ``k`` and ``distance`` are given.
+        ``"selinv"``: vertices where the selected inversion is checked against solves
+        with the same factors (0 to skip); the approximation error itself is certified
+        (``abs_error_bound``).
+    rtol : float
+        ``"probing"``: relative accuracy aimed at when choosing ``k`` and ``distance``
+        (the reported error is measured, not this target).
+    max_colours : int, optional
+        ``"probing"``: colour budget (engine applications), default
+        ``min(256, n // 4)``.
+    tol, engine_method : passed to the engine.
+    seed : int
+        Random seed of the sample vertices.
+    return_info : bool
+        Also return a dict: ``method``, ``applications`` (engine columns), ``k``,
+        ``distance``, ``colours``, and for ``"probing"`` the measured ``sample_abs_error``
+        and ``sample_rel_error`` (max over the samples), the ``samples`` and, when
+        chosen, the ``predicted_rel_error``; for ``"exact"`` the certified
+        ``abs_error_bound`` (max over vertices).
+
+    Returns
+    -------
+    diag : (n,) float (complex for a complex filter)
+    info : dict, only with ``return_info``
+    """
+    lap = as_laplacian(lap)
+    filt = check_filter(filt)
+    delta = as_delta(delta)
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    args = (method, delta, k, distance, samples, rtol, max_colours, float(tol), engine_method, seed)
+    diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args))
+    diag = diag.copy()    # the cached array stays as computed whatever the caller does
+    return (diag, dict(info)) if return_info else diag
+
+
+def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed):
+    n = lap.n
+    auto = method == "auto"
+    if auto:
+        method = "selinv" if selinv_supported(lap, filt, delta) else ("dense" if n <= EXACT_MAX else "probing")
+        log.info("kernel_diagonal: auto chose %r for %r (n=%d)", method, filt, n)
+    info = {"method": method, "applications": 0, "k": 0, "distance": None, "colours": None}
+    dtype = np.complex128 if filt.is_complex else np.float64
+
+    if method == "dense":
+        info["k"] = n
+        return eigen_diagonal(lap, filt, None, delta), info
+
+    if method == "eigen":
+        k = max(1, min(100 if k is None else int(k), n))
+        info["k"] = k
+        return eigen_diagonal(lap, filt, k, delta), info
+
+    if method == "selinv":
+        if not selinv_supported(lap, filt, delta):
+            raise ValueError("method='selinv' needs the compiled extension and pymetis, a real filter, "
+                             "and a lumped mass for delta='seed'")
+        try:
+            kern = selinv_kernel(lap, filt, tol)
+            diag, bound = kern.diagonal()
+        except NoSelinv as exc:
+            if not auto:
+                raise ValueError(f"method='selinv' cannot handle {filt.name!r}: {exc}; use 'probing'") from None
+            fallback = "dense" if n <= EXACT_MAX else "probing"
+            log.info("kernel_diagonal: selinv cannot handle %r (%s); using %r", filt, exc, fallback)
+            return _diagonal(lap, filt, fallback, delta, k, distance, samples, rtol, max_colours, tol,
+                             engine_method, seed)
+        if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
+            diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
+        info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)))
+        samples = int(min(max(samples, 0), n))
+        if samples:     # the selected inversion against solves with the same factors
+            rng = np.random.default_rng(seed)
+            idx = np.sort(rng.choice(n, samples, replace=False))
+            E = np.zeros((n, samples))
+            E[idx, np.arange(samples)] = 1.0
+            if delta == "seed":
+                E *= lap.mass[:, None]
+            exact = kern.columns(E)[idx, np.arange(samples)]
+            if delta == "seed":
+                exact *= lap.mass[idx]
+            err = np.abs(diag[idx] - exact)
+            info.update(samples=idx, sample_abs_error=float(err.max()),
+                        sample_rel_error=float(np.max(err / np.maximum(np.abs(exact), np.finfo(float).tiny))))
+        return diag, info
+
+    op = spectral_operator(lap, filt, engine_method, tol)
+    G = _gram_apply(lap, op, delta)
+    if method == "exact":
+        diag = np.empty(n, dtype=dtype)
+        bound = np.zeros(n)
+        minv = 1.0 / lap.mass
+        for a in range(0, n, BLOCK):
+            idx = np.arange(a, min(a + BLOCK, n))
+            E = np.zeros((n, idx.size))
+            E[idx, np.arange(idx.size)] = 1.0
+            Y = G(E)
+            diag[idx] = Y[idx, np.arange(idx.size)]
+            eb = np.asarray(op.error_bound if op.error_bound is not None else np.nan, dtype=float).reshape(-1)
+            # |e_i^T dY| <= ||B^-1 e_i||_B ||dY||_B, (B^-1)_ii <= 5/m_i for linear FEM masses
+            fac = 1.0 if lap.lumped else 5.0
+            bound[idx] = eb * np.sqrt(fac * minv[idx]) if delta == "mass" else np.nan
+        info["applications"] = n
+        info["abs_error_bound"] = float(np.max(bound)) if np.all(np.isfinite(bound)) else float("nan")
+        return diag, info
+
+    diag, pinfo = probing_diagonal(lap, filt, G, delta, k, distance, samples, rtol, max_colours, seed,
+                                   dtype, block=BLOCK)
+    info.update(pinfo)
+    return diag, info

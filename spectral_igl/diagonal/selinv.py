@@ -1,0 +1,171 @@
+r"""Kernel diagonals by selected inversion of the partial fractions of the filter."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..approx.rational import RationalPlan, aaa_fit, certify, rounding
+from ..laplacian import lambda_max
+from ..linalg import (
+    grounded_factor,
+    lambda_min_positive,
+    ldlt,
+    ldlt_factor,
+    mass_solve,
+    shifted_factor,
+)
+
+__all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]
+
+
+class NoSelinv(Exception):
+    """The filter or the mass matrix is outside what ``"selinv"`` handles."""
+
+
+def selinv_supported(lap, filt, delta: str = "mass") -> bool:
+    """Whether :func:`~spectral_igl.kernel_diagonal` can use ``method="selinv"`` for this input."""
+    if not ldlt.available() or (delta == "seed" and not lap.lumped):
+        return False
+    return not filt.is_complex
+
+
+def inverse_mass_diagonal(lap) -> np.ndarray:
+    """diag(B^-1): 1/m for a lumped mass, else by selected inversion (cached)."""
+    if lap.lumped:
+        return 1.0 / lap.mass
+    return lap.cache.fetch("diagonal", "inverse_mass",
+                           lambda: shifted_factor(lap, 0.0, 1.0, backend="ldlt").inverse_diagonal())
+
+
+class SelinvKernel:
+    r"""One approximation R of :math:`G = \varphi(\tilde L)B^{-1}` giving its diagonal (by
+    selected inversion), its columns and the per-vertex bound :math:`|G_{ii} - R_{ii}|`.
+
+    Distances built from the diagonal and a column of the same R are the exact distances
+    of R: :math:`|d^2 - d_R^2| \le \varepsilon \|B^{-1}(e_i - e_j)\|_B^2`, with no error
+    from mixing two approximations.
+    """
+
+    def __init__(self, lap, filt, tol):
+        self.lap, self.filt = lap, filt
+        p = filt.params.get("p") if filt.kind == "power" else None
+        self.power = int(round(p)) if p is not None and abs(p - round(p)) < 1e-12 and round(p) in (1, 2) else 0
+        self._diag = None
+        if self.power:
+            self.vol = lap.component_volume()
+            self.w = np.asarray(lap.B.sum(axis=1)).ravel() / self.vol   # Q = I - 1 w^T per component
+            self.fac, self.Lg, self.grounded = grounded_factor(lap)
+            self.eps, self.n_factorizations = 0.0, 2
+        else:
+            self._rational(tol)
+
+    # ----------------------------------------------------------------- rational filters
+    def _rational(self, tol):
+        lap, filt = self.lap, self.filt
+        b = lambda_max(lap)
+        a = lambda_min_positive(lap) if filt.singular else 0.0
+        self.minv = inverse_mass_diagonal(lap)
+        if filt.kind == "power":
+            pf = aaa_fit(filt, a, b, rtol=max(tol * 1e-3, 1e-13))
+            if pf is None:
+                raise NoSelinv("no usable rational fit")
+            eps = certify(pf, filt, a, b) + rounding(pf, a, b, b)
+        else:
+            if filt.kind == "heat":
+                # |error_i| <= eps (B^-1)_ii and G_ii >= 1/V_c (the constant mode): this
+                # eps makes the error at most tol G_ii at every vertex
+                tol = max(tol * float(np.min(1.0 / (lap.component_volume() * self.minv))), 1e-15)
+            try:
+                plan = RationalPlan(lap, filt, a, b, tol)
+            except (ValueError, RuntimeError) as exc:
+                raise NoSelinv(str(exc)) from None
+            pf, eps = plan.pf, plan.scalar_error + plan.rounding
+        for c, z, k in pf.terms:
+            # a real pole inside the spectrum's hull makes sigma L - z B indefinite
+            if abs(z.imag) <= 1e-12 * max(1.0, abs(z)) and 0.0 <= z.real / pf.sigma <= b:
+                raise NoSelinv(f"real pole {z.real / pf.sigma:.3g} inside the spectrum")
+            if filt.singular and abs(z / pf.sigma) < 0.5 * a:   # ker L would dominate that term
+                raise NoSelinv(f"pole {z / pf.sigma:.3g} too close to the singularity at 0")
+        self.pf, self.eps, self.n_factorizations = pf, eps, len(pf.terms)
+
+    def _factors(self):
+        for c, z, k in self.pf.terms:
+            theta = -z.real if z.imag == 0 else -z
+            yield c, k, shifted_factor(self.lap, self.pf.sigma, theta, backend="ldlt")
+
+    def _kernel_part(self):
+        """r(0) / V_c: what r puts on ker L, where a singular filter is 0."""
+        return float(np.real(self.pf(np.zeros(1))[0])) / self.lap.component_volume()
+
+    # ----------------------------------------------------------------- exact powers
+    def _X(self, b):
+        """The grounded pseudo-inverse X (zero rows at the grounded vertices)."""
+        x = self.fac.solve(b)
+        x[self.grounded] = 0.0
+        return x
+
+    def _commute(self, V):
+        r""":math:`Q X Q^\top V` for V of shape (n, k): the kernel of :math:`s^{-1}`."""
+        w = self.w[:, None]
+        Y = self._X(V - w * self.lap.component_sum(V))
+        return Y - self.lap.component_sum(w * Y)
+
+    # ----------------------------------------------------------------- public
+    def columns(self, E):
+        """R E for E of shape (n, k)."""
+        lap = self.lap
+        if self.power == 1:
+            return self._commute(E)
+        if self.power == 2:                 # G = G_c B G_c
+            return self._commute(lap.B @ self._commute(E))
+        out = np.zeros(E.shape)
+        for c, k, fac in self._factors():
+            out += k * (c * fac.solve(E)).real       # a conjugate pair (k = 2): 2 Re(c x)
+        out += self.pf.alpha0.real * mass_solve(lap, E, backend="ldlt")
+        if self.filt.singular:
+            out -= self._kernel_part()[:, None] * self.lap.component_sum(E)
+        return out
+
+    def diagonal(self):
+        """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
+        if self._diag is None:
+            self._diag = self._power_diagonal() if self.power else self._rational_diagonal()
+        return self._diag
+
+    def _rational_diagonal(self):
+        diag = np.zeros(self.lap.n)
+        for c, k, fac in self._factors():
+            diag += k * (c * fac.inverse_diagonal()).real
+        diag += self.pf.alpha0.real * self.minv
+        if self.filt.singular:
+            diag -= self._kernel_part()
+        return diag, self.eps * self.minv
+
+    def _power_diagonal(self):
+        lap, w, vol = self.lap, self.w, self.vol
+        u = self._X(w)
+        if self.power == 1:
+            xd = self.fac.inverse_diagonal()
+            xd[self.grounded] = 0.0
+            mdiag, Mw = xd, u
+        else:
+            # G = Q (X B X - V u u^T) Q^T, since Q^T B Q = B - V w w^T per component.
+            # diag(X B X) is the derivative at z = 0 of diag((L_g - z B_g)^-1) (B_g: B
+            # without the grounded rows), taken by a complex step: Im diag((L_g - ihB_g)^-1)/h
+            # is sum_l x_l(i)^2 / (mu_l^2 + h^2), exact to rounding for h = 1e-20 lambda_max,
+            # and nothing cancels.
+            h = 1e-20 * lambda_max(lap)
+            keep = sp.diags((~self.grounded).astype(float))
+            step = ldlt_factor(lap, (self.Lg - 1j * h * (keep @ lap.B @ keep)).tocsr())
+            xbx = step.inverse_diagonal().imag / h
+            xbx[self.grounded] = 0.0
+            mdiag = xbx - vol * u * u
+            Mw = self._X(lap.B @ u) - vol * u * self.lap.component_sum(u * w)
+        # diag(Q M Q^T) = M_ii - 2 (M w)_i + (w^T M w)_c(i)
+        return mdiag - 2.0 * Mw + self.lap.component_sum(w * Mw), np.zeros(lap.n)
+
+
+def selinv_kernel(lap, filt, tol: float) -> SelinvKernel:
+    """The :class:`SelinvKernel` of ``(filt, tol)``, cached on ``lap`` (filters are values, so an
+    equal filter built anew finds it)."""
+    return lap.cache.fetch("kernel", (filt, float(tol)), lambda: SelinvKernel(lap, filt, tol))

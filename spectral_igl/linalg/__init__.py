@@ -1,0 +1,30 @@
+r"""The engine's sparse linear algebra: factorizations, grounded pseudo-solves, eigenpairs.
+
+- :mod:`.factor`: ``factorize(A)`` over the backends (CHOLMOD through cholespy, MKL PARDISO
+  through pypardiso, the package's LDLᵀ, SuperLU);
+- :mod:`.ldlt`: the supernodal LDLᵀ with selected inversion (compiled), on a METIS
+  nested-dissection ordering;
+- :mod:`.solves`: cached factorizations of :math:`\theta B + \beta L` for one
+  :class:`~spectral_igl.Laplacian`, the one grounding rule and the pseudo-inverse solves;
+- :mod:`.eigen`: generalized eigenpairs (the truncated baseline and the dense ground truth)
+  and the smallest positive eigenvalue.
+"""
+from .eigen import cached_eigs, dense_eigs, eigs, lambda_min_positive
+from .factor import BACKENDS, Factor, available_backends, factorize
+from .ldlt import LDLT, Pattern
+from .solves import (
+                     check_backend,
+                     clear_cache,
+                     grounded_factor,
+                     grounded_vertices,
+                     ldlt_factor,
+                     ldlt_pattern,
+                     mass_solve,
+                     pseudo_solve,
+                     shifted_factor,
+)
+
+__all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
+           "shifted_factor", "mass_solve", "pseudo_solve", "grounded_vertices", "grounded_factor",
+           "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "dense_eigs",
+           "cached_eigs", "lambda_min_positive"]
