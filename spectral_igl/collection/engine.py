@@ -373,8 +373,10 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     progress : bool
         dask's text progress bar on stdout.
     retries : int
-        Times a task is resubmitted after its worker died or the store could not be
-        written.
+        Times a task that raised is resubmitted (the shape's own errors are recorded, not
+        raised: this covers a store that could not be written). A task whose worker died
+        is resubmitted by the scheduler, up to ``distributed.scheduler.allowed-failures``
+        times (dask's default 3), then recorded as failed with ``KilledWorker``.
     memory_limit : str, int or float
         Per-worker limit of the local cluster (dask's syntax: ``"auto"`` shares the
         machine's memory, ``"4GB"``, bytes).
@@ -400,7 +402,8 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     parallel on the workers); its memory is estimated (:func:`estimate_memory`). Shapes
     that fit a worker's limit run in parallel, largest first; the others run afterwards
     one at a time (on a local cluster: in a single worker given the memory of all). The
-    Laplacian's caches are cleared after every shape.
+    Laplacian's caches are cleared after every shape. One run per store at a time: a run
+    starts by removing leftovers of interrupted writes.
     """
     t_start = time.perf_counter()
     shapes = collect_inputs(inputs)
