@@ -25,7 +25,9 @@ from .applications import (
                            schrodinger,
                            smooth,
                            smooth_constrained,
+                           optimal_shape_time,
                            varadhan_distance,
+                           wasserstein_barycenter,
                            wasserstein_distance,
 )
 from .approx import METHODS, SpectralOperator, apply_filter, spectral_operator
@@ -43,7 +45,13 @@ from .distances import (
                            commute_time_distance,
                            diffusion_distance,
                            mexican_hat_distance,
+                           pairwise_biharmonic_distance,
+                           pairwise_commute_time_distance,
+                           pairwise_diffusion_distance,
+                           pairwise_mexican_hat_distance,
+                           pairwise_polyharmonic_distance,
                            pairwise_spectral_distance,
+                           pairwise_wave_distance,
                            polyharmonic_distance,
                            spectral_distance,
                            wave_distance,
@@ -73,14 +81,16 @@ __all__ = [
     "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
     "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
-    "spectral_distance", "OneToAll", "pairwise_spectral_distance", "diffusion_distance",
+    "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",
+    "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",
+    "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",
     "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
     "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
     "eccentricity", "spectral_embedding",
     # applications
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
-    "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
-    "varadhan_distance", "wasserstein_distance", "diffusion_basis", "feature_points",
+    "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
+    "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger",
 ]
 

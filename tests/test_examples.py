@@ -17,7 +17,8 @@ SCRIPTS = [
     "fig02_harmonic", "fig03_eigenfunctions", "fig04_anisotropic_heat", "fig05_lcurve",
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
-    "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing",
+    "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
+    "fig26_truncated_smoothing",
 ]
 
 
@@ -86,8 +87,22 @@ def test_fig04_anisotropic_heat(tmp_path):
 def test_fig05_lcurve(tmp_path):
     r = run("fig05_lcurve", tmp_path)
     assert r["error_smoothed"] < 0.5 * r["error_noisy"]
-    # the L-curve corner is (nearly) the best time on the curve
+    # the risk minimum is (nearly) the best time on the curve
     assert r["error_smoothed"] <= 1.25 * r["error_best_on_curve"]
+
+
+def test_fig25_constrained_smoothing(tmp_path):
+    r = run("fig25_constrained_smoothing", tmp_path)
+    assert r["constraint_error"] == 0.0  # the constrained values are kept exactly
+    assert r["constraints"] >= 4 and r["critical_after"] < r["critical_before"] / 2
+    assert r["linf_error_input"] < 0.15 and r["linf_error_clean"] < 0.15
+
+
+def test_fig26_truncated_smoothing(tmp_path):
+    r = run("fig26_truncated_smoothing", tmp_path)
+    assert r["linf_rational"] < r["linf_noisy"] and r["l2_rational"] < r["l2_noisy"]
+    # the truncated result approaches the spectrum-free one as k grows
+    assert r["diff_to_rational_k400"] < r["diff_to_rational_k100"] < r["diff_to_rational_k20"]
 
 
 def test_fig06_conditioning(tmp_path):

@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_points
+from .._validate import as_cells, as_mesh_arrays, as_points
 from ._operator import Laplacian, make_laplacian
 
 __all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass", "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness"]
@@ -22,8 +22,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
-def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(m,) area of each triangle or volume of each tetrahedron (unsigned)."""
+def element_measures(V, C=None) -> np.ndarray:
+    """(m,) area of each triangle or volume of each tetrahedron (unsigned).
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
+    V, C = as_mesh_arrays(V, C)
+    V, C = np.asarray(V, dtype=float), np.asarray(C)
     if C.shape[1] == 3:
         e1 = V[C[:, 1]] - V[C[:, 0]]
         e2 = V[C[:, 2]] - V[C[:, 0]]
@@ -34,8 +39,10 @@ def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.abs(np.einsum("ij,ij->i", _cross(e1, e2), e3)) / 6.0
 
 
-def clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh(V, C=None, rel_tol: float = 1e-12):
     """Validate ``(V, C)`` and drop degenerate elements.
+
+    ``V`` may also be a pyvista/trimesh/meshio mesh, with ``C`` omitted.
 
     An element is degenerate when it repeats a vertex or its measure is at most
     ``rel_tol`` times the largest element measure: its cotangent weights would be
@@ -48,6 +55,7 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
 
 def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
+    V, C = as_mesh_arrays(V, C)
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
     C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
@@ -136,14 +144,16 @@ def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None
     return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
 
-def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
+def laplacian(V, F=None, weights: str = "cotan", mass: str = "full") -> Laplacian:
     r"""Linear-FEM Laplacian of a triangle mesh ``(V, F)`` or tetrahedral mesh ``(V, T)``.
 
     Parameters
     ----------
-    V : (n, 3) float
-        Vertex positions (``(n, 2)`` allowed for planar triangle meshes).
-    F : (m, 3) or (m, 4) int
+    V : (n, 3) float, or a mesh object
+        Vertex positions (``(n, 2)`` allowed for planar triangle meshes); or a pyvista
+        ``PolyData``/``UnstructuredGrid``, ``trimesh.Trimesh`` or ``meshio.Mesh``, with
+        ``F`` omitted (its tetrahedra if it has any, else its triangles).
+    F : (m, 3) or (m, 4) int, optional
         Triangles, or tetrahedra when there are 4 columns.
     weights : {"cotan", "intrinsic_delaunay", "uniform"}
         ``"cotan"``: linear FEM stiffness (libigl ``cotmatrix``), triangles and tets.

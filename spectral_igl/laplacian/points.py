@@ -6,7 +6,7 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_points, as_positive, describe
+from .._validate import as_mesh_arrays, as_points, as_positive, describe
 from ._operator import Laplacian, make_laplacian
 
 __all__ = ["point_cloud_laplacian", "tangent_voronoi_areas"]
@@ -96,7 +96,7 @@ def tangent_voronoi_areas(P, k: int = 24) -> np.ndarray:
 
     Parameters
     ----------
-    P : (n, 3) float
+    P : (n, 3) float, or a pyvista/trimesh/meshio object (its points)
     k : int
         Neighbours used for the plane and the cell.
 
@@ -106,7 +106,7 @@ def tangent_voronoi_areas(P, k: int = 24) -> np.ndarray:
     """
     from scipy.spatial import cKDTree
 
-    P = as_points(P, "P", dims=(3,), min_rows=4)
+    P = as_points(as_mesh_arrays(P, name="P", need_cells=False)[0], "P", dims=(3,), min_rows=4)
     k = min(int(k), P.shape[0] - 1)
     d, J = cKDTree(P).query(P, k + 1, workers=-1)
     return _voronoi_from_knn(P, d[:, 1:], J[:, 1:])
@@ -161,8 +161,9 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "belkin", t=Non
 
     Parameters
     ----------
-    P : (n, 3) float
-        Points; at least 4.
+    P : (n, 3) float, or a mesh object
+        Points; at least 4. A pyvista, trimesh or meshio object gives its points (its
+        cells are ignored).
     k : int or None
         Number of nearest neighbours (scipy's KD-tree). Ignored when ``radius`` is given.
         ``None``: 64 for ``"belkin"``, 128 for ``"liu"`` (whose Voronoi quadrature wants a
@@ -203,7 +204,7 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "belkin", t=Non
     >>> lap.domain, lap.n
     ('points', 2000)
     """
-    P = as_points(P, "P", dims=(3,), min_rows=4)
+    P = as_points(as_mesh_arrays(P, name="P", need_cells=False)[0], "P", dims=(3,), min_rows=4)
     n = P.shape[0]
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
