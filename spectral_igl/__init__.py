@@ -21,6 +21,7 @@ from .applications import (
                            feature_points,
                            geodesic_distance,
                            harmonic,
+                           mean_curvature_flow,
                            optimal_time,
                            schrodinger,
                            smooth,
@@ -66,6 +67,7 @@ from .laplacian import (
                            laplacian,
                            make_laplacian,
                            point_cloud_laplacian,
+                           polygon_laplacian,
                            tetrahedralize,
                            voxel_laplacian,
 )
@@ -75,7 +77,8 @@ __all__ = [
     "__version__",
     # domains
     "Laplacian", "make_laplacian", "laplacian", "point_cloud_laplacian", "anisotropic_laplacian",
-    "voxel_laplacian", "graph_laplacian", "tetrahedralize", "lambda_max", "lambda_min_positive",
+    "voxel_laplacian", "graph_laplacian", "tetrahedralize", "polygon_laplacian", "lambda_max",
+    "lambda_min_positive",
     "eigs", "dense_eigs",
     # engine
     "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
@@ -91,7 +94,7 @@ __all__ = [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
-    "schrodinger",
+    "schrodinger", "mean_curvature_flow",
 ]
 
 # --- collection ---

@@ -15,7 +15,7 @@ __all__ = ["read_mesh", "write_mesh"]
 _TRI = (".obj", ".off", ".ply", ".stl", ".wrl")
 
 
-def read_mesh(path):
+def read_mesh(path, polygons: bool = False):
     """Read a mesh file.
 
     Parameters
@@ -23,11 +23,17 @@ def read_mesh(path):
     path : str or os.PathLike
         ``.obj``, ``.off``, ``.ply``, ``.stl``, ``.wrl`` (polygons are triangulated), or
         MEDIT ``.mesh`` (tetrahedra).
+    polygons : bool
+        ``.obj`` and ``.off`` only: keep the faces as they are in the file instead of
+        triangulating them. Other formats are read as without it.
 
     Returns
     -------
     V : (n, 3) float
-    F : (m, 3) int for surfaces, or T : (m, 4) int for ``.mesh`` files.
+    F : (m, 3) int for surfaces, or T : (m, 4) int for ``.mesh`` files. With
+        ``polygons=True``: an (m, k) int array when every face has k vertices, else a
+        list of m int arrays (one per face, in file order); either goes to
+        :func:`spectral_igl.laplacian.laplacian` (or ``polygon_laplacian``) as it is.
 
     Raises
     ------
@@ -56,6 +62,21 @@ def read_mesh(path):
     if ext not in _TRI:
         raise ValueError(f"unsupported mesh format {ext!r} for {path}; expected one of "
                          f"{', '.join(_TRI + ('.mesh',))}")
+    if not isinstance(polygons, (bool, np.bool_)):
+        raise TypeError(f"polygons must be a bool, got {type(polygons).__name__}")
+    if polygons and ext in (".obj", ".off"):
+        V, faces = (_read_obj_polygons if ext == ".obj" else _read_off_polygons)(path)
+        if len(V) == 0 or len(faces) == 0:
+            raise ValueError(f"{path} holds no faces")
+        V = as_points(V, f"vertices of {path.name}", dims=(3,))
+        sizes = {len(f) for f in faces}
+        if min(sizes) < 3:
+            raise ValueError(f"{path} has a face with fewer than 3 vertices")
+        F = [np.asarray(f, dtype=np.int64) for f in faces]
+        top = max(int(f.max()) for f in F)
+        if min(int(f.min()) for f in F) < 0 or top >= len(V):
+            raise ValueError(f"faces of {path.name} index vertices outside [0, {len(V)})")
+        return V, (np.vstack(F) if len(sizes) == 1 else F)
     try:
         V, F = igl.read_triangle_mesh(str(path))
     except RuntimeError as err:
@@ -140,6 +161,40 @@ def write_mesh(path, V, F=None, fields=None) -> None:
         raise ValueError(f"unsupported mesh format {path.suffix!r}; expected .obj, .off, .ply, .stl, "
                          f".vtu or .vtk")
     igl.write_triangle_mesh(str(path), V, F)
+
+
+def _read_obj_polygons(path: Path):
+    """Vertices and faces (lists of 0-based indices) of an OBJ file, faces untouched."""
+    V, faces = [], []
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            if line.startswith("v "):
+                V.append([float(x) for x in line.split()[1:4]])
+            elif line.startswith("f "):
+                idx = [int(tok.split("/")[0]) for tok in line.split()[1:]]
+                nv = len(V)  # negative indices count back from the vertices read so far
+                faces.append([i - 1 if i > 0 else nv + i for i in idx])
+    return np.asarray(V, dtype=np.float64).reshape(-1, 3), faces
+
+
+def _read_off_polygons(path: Path):
+    """Vertices and faces of an OFF file, faces untouched."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        toks = [ln.split("#")[0].split() for ln in fh]
+    toks = [t for t in toks if t]
+    try:
+        head = toks[0]
+        if head[0].upper().endswith("OFF"):
+            head = head[1:] or toks[1]
+            body = toks[2:] if not toks[0][1:] else toks[1:]
+        else:
+            body = toks[1:]
+        nv, nf = int(head[0]), int(head[1])
+        V = np.array([[float(x) for x in t[:3]] for t in body[:nv]], dtype=np.float64)
+        faces = [[int(x) for x in t[1:1 + int(t[0])]] for t in body[nv:nv + nf]]
+    except (IndexError, ValueError) as err:
+        raise ValueError(f"could not read mesh {path}: not a valid OFF file") from err
+    return V.reshape(-1, 3), faces
 
 
 def _point_data(fields, n: int, ply: bool) -> dict:

@@ -18,7 +18,7 @@ SCRIPTS = [
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
     "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
-    "fig26_truncated_smoothing",
+    "fig26_truncated_smoothing", "fig_mcf",
 ]
 
 
@@ -174,3 +174,11 @@ def test_fig24_26_smoothing(tmp_path):
     r = run("fig24_26_smoothing", tmp_path)
     assert r["critical_after"] < 0.5 * r["critical_before"]
     assert r["error_smoothed"] < r["error_noisy"]
+
+
+def test_fig_mcf(tmp_path):
+    r = run("fig_mcf", tmp_path)
+    # the conformalized flow rounds the blob, keeps its area and every triangle
+    assert np.all(np.diff(r["roundness"]) < 0) and r["roundness"][-1] < 0.5 * r["roundness"][0]
+    assert r["area_change"] < 1e-12
+    assert r["min_area_ratio_conformal"] > 1e-3
