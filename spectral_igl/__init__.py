@@ -21,11 +21,14 @@ from .applications import (
                            feature_points,
                            geodesic_distance,
                            harmonic,
+                           mean_curvature_flow,
                            optimal_time,
                            schrodinger,
                            smooth,
                            smooth_constrained,
+                           optimal_shape_time,
                            varadhan_distance,
+                           wasserstein_barycenter,
                            wasserstein_distance,
 )
 from .approx import METHODS, SpectralOperator, apply_filter, spectral_operator
@@ -43,7 +46,13 @@ from .distances import (
                            commute_time_distance,
                            diffusion_distance,
                            mexican_hat_distance,
+                           pairwise_biharmonic_distance,
+                           pairwise_commute_time_distance,
+                           pairwise_diffusion_distance,
+                           pairwise_mexican_hat_distance,
+                           pairwise_polyharmonic_distance,
                            pairwise_spectral_distance,
+                           pairwise_wave_distance,
                            polyharmonic_distance,
                            spectral_distance,
                            wave_distance,
@@ -58,6 +67,7 @@ from .laplacian import (
                            laplacian,
                            make_laplacian,
                            point_cloud_laplacian,
+                           polygon_laplacian,
                            tetrahedralize,
                            voxel_laplacian,
 )
@@ -67,19 +77,27 @@ __all__ = [
     "__version__",
     # domains
     "Laplacian", "make_laplacian", "laplacian", "point_cloud_laplacian", "anisotropic_laplacian",
-    "voxel_laplacian", "graph_laplacian", "tetrahedralize", "lambda_max", "lambda_min_positive",
+    "voxel_laplacian", "graph_laplacian", "tetrahedralize", "polygon_laplacian", "lambda_max",
+    "lambda_min_positive",
     "eigs", "dense_eigs",
     # engine
     "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
     "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
-    "spectral_distance", "OneToAll", "pairwise_spectral_distance", "diffusion_distance",
+    "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",
+    "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",
+    "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",
     "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
     "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
     "eccentricity", "spectral_embedding",
     # applications
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
-    "diffusion_smooth", "optimal_time", "HeatGeodesics", "geodesic_distance",
-    "varadhan_distance", "wasserstein_distance", "diffusion_basis", "feature_points",
-    "schrodinger",
+    "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
+    "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
+    "schrodinger", "mean_curvature_flow",
 ]
+
+# --- collection ---
+from . import collection  # noqa: E402  (dask and zarr are imported only when it runs)
+
+__all__ += ["collection"]
