@@ -606,8 +606,8 @@ def _batch_arguments(sub):
                    help="eigenvalues: how many (default 20); wks: eigenpairs (default 100)")
     p.add_argument("--method", default="auto", help="diagonal method (default auto; wks: eigen)")
     p.add_argument("--tol", type=_positive, default=1e-8)
-    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"))
-    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"))
+    p.add_argument("--weights", default="auto", choices=("auto", "cotan", "intrinsic_delaunay", "uniform"))
+    p.add_argument("--mass", default="lumped", choices=("lumped", "full", "barycentric"))
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="local worker processes (default: one per core)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
