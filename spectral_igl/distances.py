@@ -15,9 +15,9 @@ import warnings
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_positive
+from ._validate import as_delta, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
-from .diagonal import EXACT_MAX, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal import EXACT_MAX, check_diagonal_options, kernel_diagonal, low_rank, phi_values, selinv_kernel
 from .filters import (
     biharmonic,
     check_filter,
@@ -43,6 +43,8 @@ __all__ = [
 ]
 
 BLOCK = 64
+#: largest order of :func:`polyharmonic_distance`
+MAX_ORDER = 16
 #: one-to-many with more targets than this (on a large mesh) goes through the diagonal
 MANY_TARGETS = 256
 
@@ -125,6 +127,11 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     delta = as_delta(delta)
     n = lap.n
     s = as_index(source, n, "source")
+    k, distance, samples, rtol, max_colours, tol, _ = check_diagonal_options(
+        n, diagonal, k, distance, samples, rtol, max_colours, tol, method)
+    max_recompute = None if max_recompute is None else as_int(max_recompute, "max_recompute", lo=0)
+    if targets is not None:
+        as_indices(targets, n, "targets")
     info = {}
     if diagonal == "eigen":
         d = _eigen_distance(lap, filt, s, k, delta)
@@ -216,7 +223,7 @@ def _select(d, targets, n):
 
 def _eigen_distance(lap, filt, s, k, delta):
     """Truncated-eigenpair distance from s to all vertices (the classical baseline)."""
-    k = 100 if k is None else int(k)
+    k = 100 if not k else int(k)
     lam, W = low_rank(lap, max(1, min(k, lap.n)), delta)
     w = np.abs(phi_values(filt, lam, lap.n_components)) ** 2
     d2 = ((W - W[s]) ** 2) @ w
@@ -241,6 +248,10 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     filt = check_filter(filt)
     delta = as_delta(delta)
     S = as_indices(seeds, lap.n, "seeds")
+    m = S.size
+    check_dense_size(8.0 * (2 * lap.n * m + 4 * m * m),
+                     f"the kernel columns ({lap.n}, {m}) and the ({m}, {m}) distance matrix of {m} seeds",
+                     "use fewer seeds, or OneToAll(lap, filt).distance(seed) one seed at a time")
     C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
@@ -293,7 +304,12 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
     r"""Poly-harmonic distance of integer order ``k``: :math:`|\varphi|^2(s) = s^{-k}`.
 
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
+
+    ``k`` is at most :data:`MAX_ORDER`: :math:`\lambda^{-k}` spans
+    :math:`(\lambda_{max}/\lambda_{min})^k`, beyond double precision for larger orders on
+    any mesh, and the distance is then that of the first eigenfunction alone.
     """
+    k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return spectral_distance(lap, polyharmonic(k), source, targets, **kwargs)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_positive, describe
+from .._validate import as_indices, as_nonnegative, as_positive, describe
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
@@ -159,8 +159,9 @@ class HeatGeodesics:
                  mollify: float = 1e-6):
         import igl
 
-        if step not in _STEPS:
-            raise ValueError(f"step must be one of {_STEPS}, got {step!r}")
+        if not isinstance(step, str) or step not in _STEPS:
+            raise ValueError(f"step must be one of {_STEPS}, got {describe(step)}")
+        mollify = as_nonnegative(mollify, "mollify")
         lap = _as_laplacian(lap_or_mesh)
         V, C = lap.data["V"], _cells(lap)
         if lap.domain == "tet" and step == "intrinsic_delaunay":
@@ -245,6 +246,10 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     -------
     (n,) float
     """
+    if not isinstance(method, str) or method not in ("heat", "varadhan"):
+        raise ValueError(f"method must be 'heat' or 'varadhan', got {describe(method)}")
+    if method == "varadhan" and step != "intrinsic_delaunay":
+        raise ValueError(f"step applies to method='heat' only, got step={step!r} with method='varadhan'")
     if method == "heat":
         return HeatGeodesics(lap_or_mesh, t=t, step=step).compute(source)
     if method == "varadhan":
@@ -264,7 +269,9 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     source : int
         Source vertex.
     t : float, optional
-        Time; default :math:`4h^2`, ``h`` the mean edge length.
+        Time; default the larger of :math:`4h^2` (``h`` the mean edge length) and
+        :math:`(1.5R)^2/80`, ``R`` the largest Euclidean distance from the source within its
+        component, so that :math:`e^{-d^2/4t}` stays above :math:`e^{-20}` out to about 1.5R.
     normalize : bool, default True
         Divide out the leading term of the short-time expansion,
         :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
@@ -277,8 +284,14 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     Returns
     -------
     (n,) float
-        ``inf`` where the computed kernel is not positive (it has fallen below the
-        accuracy of the evaluation).
+        ``inf`` only on vertices of other connected components than the source's.
+
+    Raises
+    ------
+    ValueError
+        When the computed kernel is not positive at some vertex of the source's component
+        (it has fallen below the accuracy of the evaluation): the message gives how many and
+        a time ``t`` large enough.
 
     Notes
     -----
@@ -295,7 +308,9 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
         raise ValueError(f"source must be a single vertex for Varadhan's formula, got {src.size}")
     V, C = lap.data["V"], _cells(lap)
     h = mean_edge_length(V, C)
-    t = 4.0 * h ** 2 if t is None else as_positive(t, "t")
+    same = lap.components == lap.components[src[0]]
+    R = float(np.linalg.norm(V[same] - V[src[0]], axis=1).max())
+    t = max(4.0 * h ** 2, (1.5 * R) ** 2 / 80.0) if t is None else as_positive(t, "t")
     e = np.zeros(lap.n)
     e[src[0]] = 1.0
     op = SpectralOperator(lap, heat(t), method=method, tol=tol)
@@ -307,5 +322,11 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
             logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
         d2 = -4.0 * t * logk
     d = np.sqrt(np.maximum(d2, 0.0))
-    d[~np.isfinite(d2)] = np.inf
+    lost = same & ~np.isfinite(d2)
+    if lost.any():
+        raise ValueError(f"the heat kernel at t={t:.3g} is below the evaluation's accuracy at "
+                         f"{int(lost.sum())} of the {int(same.sum())} vertices connected to the source, so "
+                         f"Varadhan's formula has no value there; use t >= {(1.5 * R) ** 2 / 40.0:.3g} "
+                         "or geodesic_distance(..., method='heat')")
+    d[~same] = np.inf
     return d
