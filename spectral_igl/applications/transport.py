@@ -5,13 +5,13 @@ import warnings
 
 import numpy as np
 
-from .._validate import as_positive, as_signal
-from ..approx import SpectralOperator
+from .._validate import as_choice, as_int, as_positive, as_signal, as_tol
+from ..approx import METHODS, SpectralOperator
 from ..filters import heat
 from ..laplacian import as_laplacian
 from .geodesics import mean_edge_length
 
-__all__ = ["wasserstein_distance", "sinkhorn"]
+__all__ = ["wasserstein_distance", "sinkhorn", "check_iteration"]
 
 
 def _density(lap, mu, name):
@@ -25,6 +25,15 @@ def _density(lap, mu, name):
     if total <= 0:
         raise ValueError(f"{name} has zero mass")
     return mu / total
+
+
+def check_iteration(max_iter, tol, method, kernel_tol):
+    """Validate the Sinkhorn settings before any work; returns ``(max_iter, tol, kernel_tol)``."""
+    max_iter = as_int(max_iter, "max_iter", lo=1, hi=10 ** 6)
+    tol = as_tol(tol, "tol")
+    as_choice(method, "method", METHODS)
+    kernel_tol = as_tol(kernel_tol, "kernel_tol")
+    return max_iter, tol, kernel_tol
 
 
 def sinkhorn(lap, mu0, mu1, gamma, op=None, max_iter: int = 2000, tol: float = 1e-9,
@@ -48,7 +57,10 @@ def sinkhorn(lap, mu0, mu1, gamma, op=None, max_iter: int = 2000, tol: float = 1
     """
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
+    max_iter, tol, kernel_tol = check_iteration(max_iter, tol, method, kernel_tol)
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
+    if op is not None and not isinstance(op, SpectralOperator):
+        raise TypeError(f"op must be a SpectralOperator of the heat filter, got {type(op).__name__}")
     if op is None:
         op = SpectralOperator(lap, heat(gamma / 4.0), method=method, tol=kernel_tol)
     a = lap.mass
@@ -152,6 +164,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
     """
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
+    max_iter, tol, kernel_tol = check_iteration(max_iter, tol, method, kernel_tol)
     mu0, mu1 = _density(lap, mu0, "mu0"), _density(lap, mu1, "mu1")
     if np.array_equal(mu0, mu1):
         return 0.0
@@ -168,6 +181,9 @@ def wasserstein_distance(lap, mu0, mu1, gamma, max_iter: int = 2000, tol: float 
     vals = []
     for a, b in ((mu0, mu1), (mu0, mu0), (mu1, mu1)):
         v, info = sinkhorn(lap, a, b, gamma, **kw)
+        if not (np.isfinite(v) and np.isfinite(info["marginal_error"])):
+            raise ValueError(f"Sinkhorn did not reach finite marginals after {info['iterations']} "
+                             f"iteration(s) at gamma = {gamma:g}: increase max_iter or gamma")
         if info["marginal_error"] > 1e-6:
             warnings.warn(f"Sinkhorn stalled at marginal error {info['marginal_error']:.2g} after "
                           f"{info['iterations']} iterations (kernel_tol {kernel_tol:g}); the result "
