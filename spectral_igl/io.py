@@ -31,8 +31,11 @@ def read_mesh(path):
     ------
     FileNotFoundError
         The file does not exist.
+    IsADirectoryError
+        ``path`` is a directory.
     ValueError
-        The extension is not supported, or the file holds no valid mesh.
+        The extension is not supported, or the file holds no valid mesh; a malformed file
+        (see :func:`check_mesh_file`) is refused with its name and line.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
