@@ -343,9 +343,12 @@ def run_case(build, case) -> dict:
 def serve():
     """Worker loop: a JSON case per line on stdin, a JSON answer per line on stdout."""
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    # the protocol gets its own descriptor; anything else written to fd 1 (Python or C++
+    # libraries) goes to stderr and cannot corrupt it
+    out = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
     build = _Build()
-    out = sys.stdout
-    sys.stdout = sys.stderr          # stray prints must not corrupt the protocol
     out.write(json.dumps({"ready": True}) + "\n")
     out.flush()
     for line in sys.stdin:

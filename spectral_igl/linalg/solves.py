@@ -123,6 +123,8 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
     r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise)."""
     lap = as_laplacian(lap)
+    g = as_signal(g, lap.n, "g")
+    backend = check_backend(backend)
     if lap.lumped:
         d = lap.B.diagonal()
         return g / (d if g.ndim == 1 else d[:, None])
