@@ -245,6 +245,8 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     Returns
     -------
     (n,) float
+        ``inf`` exactly on the vertices of connected components that hold no source (e.g.
+        vertices no face references): no path reaches them.
     """
     if not isinstance(method, str) or method not in ("heat", "varadhan"):
         raise ValueError(f"method must be 'heat' or 'varadhan', got {describe(method)}")
@@ -271,7 +273,8 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     t : float, optional
         Time; default the larger of :math:`4h^2` (``h`` the mean edge length) and
         :math:`(1.5R)^2/80`, ``R`` the largest Euclidean distance from the source within its
-        component, so that :math:`e^{-d^2/4t}` stays above :math:`e^{-20}` out to about 1.5R.
+        component (so that :math:`e^{-d^2/4t}` stays above :math:`e^{-20}` out to about 1.5R),
+        doubled (at most 7 times) until the computed kernel is positive on the whole component.
     normalize : bool, default True
         Divide out the leading term of the short-time expansion,
         :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
@@ -310,23 +313,29 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     h = mean_edge_length(V, C)
     same = lap.components == lap.components[src[0]]
     R = float(np.linalg.norm(V[same] - V[src[0]], axis=1).max())
-    t = max(4.0 * h ** 2, (1.5 * R) ** 2 / 80.0) if t is None else as_positive(t, "t")
+    auto = t is None
+    t = max(4.0 * h ** 2, (1.5 * R) ** 2 / 80.0) if auto else as_positive(t, "t")
     e = np.zeros(lap.n)
     e[src[0]] = 1.0
-    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
-    K = np.real(op.apply_inverse_mass(e))
     D = 2.0 if lap.domain == "triangle" else 3.0
+    for _ in range(8 if auto else 1):   # the default time doubles until every vertex is in range
+        op = SpectralOperator(lap, heat(t), method=method, tol=tol)
+        K = np.real(op.apply_inverse_mass(e))
+        lost = same & ~(K > 0)
+        if not lost.any():
+            break
+        t_lost = t
+        t = 2.0 * t
+    if lost.any():
+        raise ValueError(f"the heat kernel at t={t_lost:.3g} is below the evaluation's accuracy at "
+                         f"{int(lost.sum())} of the {int(same.sum())} vertices connected to the source, so "
+                         f"Varadhan's formula has no value there; use a larger t or "
+                         "geodesic_distance(..., method='heat')")
     with np.errstate(divide="ignore", invalid="ignore"):
         logk = np.where(K > 0, np.log(np.where(K > 0, K, 1.0)), -np.inf)
         if normalize:
             logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
         d2 = -4.0 * t * logk
     d = np.sqrt(np.maximum(d2, 0.0))
-    lost = same & ~np.isfinite(d2)
-    if lost.any():
-        raise ValueError(f"the heat kernel at t={t:.3g} is below the evaluation's accuracy at "
-                         f"{int(lost.sum())} of the {int(same.sum())} vertices connected to the source, so "
-                         f"Varadhan's formula has no value there; use t >= {(1.5 * R) ** 2 / 40.0:.3g} "
-                         "or geodesic_distance(..., method='heat')")
     d[~same] = np.inf
     return d
