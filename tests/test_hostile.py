@@ -122,8 +122,10 @@ def test_memory_budget_refuses_dense_results_up_front(monkeypatch):
         sig.set_memory_budget(10 ** 5)
         refused(ValueError, "150 eigenvectors of length 162.*spectrum-free", sig.eigs, LAP, 150)
         sig.set_memory_budget(10 ** 6)
-        refused(ValueError, "dense kernel columns", sig.heat_kernel, LAP, 0.1, np.arange(N))
-        # below the budget the same calls work
+        sig.set_memory_budget(3 * 10 ** 5)
+        refused(ValueError, "162 dense kernel columns", sig.heat_kernel, LAP, 0.1, np.arange(N))
+        # within the budget the same calls work (the dense eigenproblem takes 1.2 MiB)
+        sig.set_memory_budget(2 * 10 ** 6)
         D = sig.pairwise_spectral_distance(LAP, sig.filters.heat(0.1), [0, 5, 9])
         assert D.shape == (3, 3) and np.all(np.isfinite(D))
     finally:
