@@ -7,8 +7,9 @@ ValueError/TypeError; any other exception type, NaN/inf in the result, a dead wo
 silent one fails it. Hypothesis chooses, per function, which parameters get a hostile value
 and which one (from the pools in ``fuzz_cases.POOLS`` and from arbitrary floats and integers).
 
-The CI run takes a couple of minutes. ``SPECTRAL_IGL_FUZZ=long`` runs many more examples per
-function with a longer timeout.
+The CI run takes a couple of minutes. ``SPECTRAL_IGL_FUZZ=long`` runs many more random examples
+per function with a longer timeout; ``SPECTRAL_IGL_FUZZ_LOG=file`` appends each failure to
+``file`` as it happens.
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from pathlib import Path
 import pytest
 
 hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -33,6 +34,8 @@ LONG = os.environ.get("SPECTRAL_IGL_FUZZ", "") == "long"
 EXAMPLES = 300 if LONG else 40
 TIMEOUT = 120.0 if LONG else 45.0
 RUNNER = Path(__file__).resolve().parent / "fuzz_cases.py"
+#: failures are also appended to this file as they happen (long runs)
+LOG = os.environ.get("SPECTRAL_IGL_FUZZ_LOG")
 
 
 class Worker:
@@ -127,11 +130,15 @@ def test_valid_call_is_finite(worker, name):
 @pytest.mark.parametrize("name", sorted(FUNCTIONS))
 def test_hostile_input(worker, name):
     """Hostile values in one or two parameters: a finite result or a ValueError/TypeError."""
+    # no shrinking: the cases are small already, and shrinking a hang would repeat it
     @settings(max_examples=EXAMPLES, deadline=None, database=None, derandomize=not LONG,
-              suppress_health_check=list(HealthCheck))
+              suppress_health_check=list(HealthCheck), phases=[Phase.explicit, Phase.generate])
     @given(case=_cases(name))
     def check(case):
         res = worker.run(case)
+        if res["outcome"] not in ("ok", "refused") and LOG:
+            with open(LOG, "a") as fh:
+                fh.write(_fail(case, res) + "\n")
         assert res["outcome"] in ("ok", "refused"), _fail(case, res)
 
     check()

@@ -99,6 +99,9 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     lap = as_laplacian(lap)
     beta, theta = _scalar(beta, "beta"), _scalar(theta, "theta")
     backend = check_backend(backend)
+    if theta == 0:
+        raise ValueError(f"theta must be nonzero: theta B + beta L is singular for theta = 0 (constants "
+                         f"are in the kernel of L), got theta={theta}; use pseudo_solve for L")
     cplx = isinstance(beta, complex) or isinstance(theta, complex)
     spd = (not cplx) and theta > 0 and beta >= 0
     if cplx and backend == "auto" and ldlt.available() and _ldlt_safe(lap, beta, theta):
