@@ -10,7 +10,6 @@ crash or a hang shows up in the parent as a dead or silent worker.
 from __future__ import annotations
 
 import json
-import math
 import os
 import sys
 import tempfile
