@@ -63,7 +63,7 @@ def test_overflowing_signal_is_refused_and_linearity_is_the_way_out():
      r"degree must be an integer in \[0, 100000\]"),
     (lambda: sig.apply_filter(LAP, sig.filters.heat(0.1), np.ones(N), tol=1.5), r"tol must be .* \(0, 1\)"),
     (lambda: sig.wasserstein_distance(LAP, np.ones(N), np.r_[1.0, np.zeros(N - 1)], 0.05, max_iter=0),
-     r"max_iter must be an integer in \[1, 1000000\]"),
+     r"max_iter must be an integer in \[1, 10000000\]"),
     (lambda: sig.optimal_time(LAP, np.zeros(N)), "constant on every connected component"),
     (lambda: sig.wks(LAP, [1.0, 2.0], k=0), r"k must be an integer in \[1, 162\]"),
     (lambda: sig.wks(LAP, [1e300]), "sigma is required|energies are log-eigenvalues"),
@@ -184,9 +184,14 @@ def test_geodesic_distance_with_unreferenced_vertices(where):
 
 
 def test_quads_are_not_taken_as_tetrahedra():
+    """(m, 4) rows with four coplanar corners are polygons: the polygon Laplacian, with the
+    true area, never a tetrahedral one; a caller of the tet check gets the pointer there."""
     Q = np.array([[0, 1, 2, 3], [1, 4, 5, 2]])
     P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], float)
-    refused(ValueError, "look like quads, not tetrahedra", sig.laplacian, P, Q)
+    lap = sig.laplacian(P, Q)
+    assert lap.domain != "tet" and abs(lap.area() - 2.0) < 1e-12
+    from spectral_igl._validate import check_tets_have_volume
+    refused(ValueError, "look like quads, not tetrahedra", check_tets_have_volume, P, Q)
 
 
 def test_varadhan_is_finite_on_a_connected_shape():
@@ -194,8 +199,8 @@ def test_varadhan_is_finite_on_a_connected_shape():
     d = sig.varadhan_distance(sig.laplacian(Vb, Fb), 0)
     exact = np.arccos(np.clip(Vb @ Vb[0], -1, 1))
     assert np.all(np.isfinite(d))
-    # the default time is a compromise for the range: a coarse but finite estimate
-    assert np.abs(d - exact).max() < 0.5
+    near = exact < 1.0          # the formula is a short-distance one (measured: 0.06 within 1 rad)
+    assert np.abs(d - exact)[near].max() < 0.1
 
 
 # ---- files and the command line -----------------------------------------------------------------
