@@ -462,6 +462,7 @@ def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
     r"""(m, m) poly-harmonic distances of order ``k``,
     :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2`; entries equal
     :func:`polyharmonic_distance`."""
+    k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
 
 
