@@ -554,6 +554,6 @@ def check_tets_have_volume(V: np.ndarray, T: np.ndarray, rel_tol: float = 1e-12)
         scale = np.max(np.linalg.norm(np.concatenate([e1, e2, e3]), axis=1)) ** 3
     flat = ~(vol > rel_tol * scale) if scale > 0 else np.ones(len(T), bool)
     if 2 * np.count_nonzero(flat) > len(T):
-        raise ValueError(f"T of shape {T.shape} has zero volume in {np.count_nonzero(flat)} of its rows (the four corners are "
-                         "coplanar): these look like quads, not tetrahedra; pass polygons as triangles "
-                         "(split each quad into two) or through the polygon path, and tetrahedra as (m, 4)")
+        raise ValueError(f"T of shape {T.shape} is degenerate: zero volume in {np.count_nonzero(flat)} of its "
+                         "rows (the four corners are coplanar); these look like quads, not tetrahedra: use "
+                         "laplacian(V, F, elements='polygon') or split each quad into two triangles")

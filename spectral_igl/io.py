@@ -209,8 +209,8 @@ def _check_obj(path):
                 except ValueError:
                     _fail(path, no, f"face vertex {r!r} is not an integer index: {line[:80]!r}")
                 if i == 0 or i > nv or i < -nv:
-                    _fail(path, no, f"face vertex index {i} does not refer to one of the {nv} vertices "
-                                    f"defined before it (OBJ indices start at 1): {line[:80]!r}")
+                    _fail(path, no, f"face vertex index {i} is outside the {nv} vertices defined before "
+                                    f"it (OBJ indices start at 1): {line[:80]!r}")
 
 
 def _check_off(path):
@@ -260,7 +260,7 @@ def _check_off(path):
             _fail(path, fno, f"face with {min(k, len(idx))} vertex/vertices, need at least 3 "
                              f"(truncated line?): {line[:80]!r}")
         if min(idx) < 0 or max(idx) >= nv:
-            _fail(path, fno, f"face vertex index out of [0, {nv}): {line[:80]!r}")
+            _fail(path, fno, f"face vertex index outside [0, {nv}): {line[:80]!r}")
 
 
 def _check_ply(path):
