@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fuzz_cases import FUNCTIONS, POOLS  # noqa: E402
 
 LONG = os.environ.get("SPECTRAL_IGL_FUZZ", "") == "long"
-EXAMPLES = 300 if LONG else 40
+EXAMPLES = 300 if LONG else 100
 TIMEOUT = 120.0 if LONG else 45.0
 RUNNER = Path(__file__).resolve().parent / "fuzz_cases.py"
 #: failures are also appended to this file as they happen (long runs)

@@ -204,6 +204,7 @@ class SpectralOperator(spla.LinearOperator):
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         backend = check_backend(backend)
         options = check_engine_options(method, options, lap.n)
+        check_spectral_function(filt, 0.0, lambda_max(lap), repr(filt), singular=filt.singular)
         super().__init__(np.complex128 if filt.is_complex else np.float64, (lap.n, lap.n))
         if method == "auto":
             method = choose_method(lap, filt, tol)
@@ -213,7 +214,6 @@ class SpectralOperator(spla.LinearOperator):
                              "use 'rational', 'chebyshev', 'shift_invert' or 'krylov'")
         self.lap, self.filter, self.method, self.tol = lap, filt, method, tol
         self.lambda_max = lambda_max(lap)
-        check_spectral_function(filt, 0.0, self.lambda_max, repr(filt), singular=filt.singular)
         self.a = lambda_min_positive(lap) if filt.singular else 0.0
         kwargs = dict(options)
         if method not in ("dense", "eigen"):

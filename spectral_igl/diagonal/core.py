@@ -44,11 +44,11 @@ import logging
 
 import numpy as np
 
-from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size
+from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size, check_spectral_function
 from ..approx import METHODS as ENGINE_METHODS
 from ..approx import spectral_operator
 from ..filters import check_filter
-from ..laplacian import as_laplacian
+from ..laplacian import as_laplacian, lambda_max
 from ..progress import progress_bar
 from .probing import probing_diagonal
 from .selinv import NoSelinv, selinv_kernel, selinv_supported
@@ -164,6 +164,7 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     delta = as_delta(delta)
     k, distance, samples, rtol, max_colours, tol, seed = check_diagonal_options(
         lap.n, method, k, distance, samples, rtol, max_colours, tol, engine_method, seed)
+    check_spectral_function(filt, 0.0, lambda_max(lap), repr(filt), singular=filt.singular)
     args = (method, delta, k, distance, samples, rtol, max_colours, float(tol), engine_method, seed)
     diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args, progress=progress))
     diag = diag.copy()    # the cached array stays as computed whatever the caller does

@@ -120,7 +120,12 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
         A = (theta * lap.B + beta * lap.L).tocsr()
         return factorize(A, backend=backend, spd=True) if spd else factorize(A, backend="superlu", spd=False)
 
-    return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
+    try:
+        return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
+    except RuntimeError as err:   # the sparse backends' word for a numerically singular matrix
+        raise ValueError(f"theta B + beta L cannot be factorized for beta={beta}, theta={theta} (singular "
+                         f"or denormal: -theta/beta is an eigenvalue, or one of them dwarfs the other): "
+                         f"{err}") from err
 
 
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
