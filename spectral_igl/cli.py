@@ -502,7 +502,6 @@ def _job_smooth(args):
     if geometry:
         mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
         for o in mesh_outs:    # the smoothed shape (with its displacement where fields fit)
-            Path(o).parent.mkdir(parents=True, exist_ok=True)
             fields = {"displacement": np.linalg.norm(g - V, axis=1)} \
                 if Path(o).suffix.lower() in _FIELD_MESHES else None
             write_mesh(o, g, C, fields=fields)
