@@ -116,8 +116,12 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
     return a
 
 
-def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndarray:
-    """Validate a signal of shape ``(n,)`` or ``(n, k)``; return float64 or complex128."""
+def as_signal(f, n: int, name: str = "f", allow_complex: bool = True,
+              max_magnitude: float | None = None) -> np.ndarray:
+    """Validate a signal of shape ``(n,)`` or ``(n, k)``, k >= 1; return float64 or complex128.
+
+    Entries beyond ``max_magnitude`` (default :data:`MAX_MAGNITUDE`) are refused; ``inf``
+    accepts any finite value (for solvers that also serve intermediate vectors)."""
     a = as_array(f, name)
     if a.dtype.kind == "c" and not allow_complex:
         raise TypeError(f"{name} must be real, got {describe(a)}")
@@ -130,7 +134,7 @@ def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndar
     a = a.astype(np.complex128 if a.dtype.kind == "c" else np.float64, copy=False)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} contains NaN or inf")
-    return check_magnitude(a, name)
+    return check_magnitude(a, name, MAX_MAGNITUDE if max_magnitude is None else max_magnitude)
 
 
 def as_index(i, n: int, name: str = "source") -> int:

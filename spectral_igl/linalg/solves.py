@@ -131,7 +131,7 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
     r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise)."""
     lap = as_laplacian(lap)
-    g = as_signal(g, lap.n, "g")
+    g = as_signal(g, lap.n, "g", max_magnitude=np.inf)   # also the engine's intermediate vectors
     backend = check_backend(backend)
     if lap.lumped:
         d = lap.B.diagonal()
