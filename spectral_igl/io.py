@@ -176,7 +176,9 @@ _MIN_TEXT_BYTES = 6
 
 def _fail(path, line_no, msg):
     where = f"{path}, line {line_no}" if line_no else str(path)
-    raise ValueError(f"{where}: {msg}")
+    ext = Path(path).suffix.lower()
+    kind = "MEDIT .mesh" if ext == ".mesh" else ext[1:].upper()
+    raise ValueError(f"{where}: not a valid {kind} file: {msg}")
 
 
 def _text_lines(path):

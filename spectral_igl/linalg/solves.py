@@ -19,7 +19,7 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_signal, describe
+from .._validate import as_signal, check_finite_result, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from . import ldlt
 from .factor import available_backends, factorize
@@ -135,8 +135,11 @@ def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarr
     backend = check_backend(backend)
     if lap.lumped:
         d = lap.B.diagonal()
-        return g / (d if g.ndim == 1 else d[:, None])
-    return shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
+        with np.errstate(over="ignore"):
+            u = g / (d if g.ndim == 1 else d[:, None])
+    else:
+        u = shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
+    return check_finite_result(u, "B^-1 g", "g is too large for the masses (rescale it)")
 
 
 def grounded_vertices(lap: Laplacian) -> np.ndarray:
