@@ -5,6 +5,7 @@ import numpy as np
 
 from ._validate import as_positive, describe
 from .diagonal import kernel_diagonal
+from .diagonal.multiscale import family_diagonals, heat_diagonals
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian
 from .linalg import cached_eigs
@@ -49,15 +50,33 @@ def hks(lap, times, method: str = "auto", **kwargs):
 
     .. math:: HKS(i, t) = K_t(i, i) = \sum_l e^{-t\lambda_l}\, x_l(i)^2
 
+    Several times with ``method="auto"`` or ``"selinv"`` share one set of poles
+    (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
+    as one time, each time with its own certified bound (``kernel_diagonal`` options other
+    than ``tol`` select the one-time-at-a-time path).
+
     Returns
     -------
     (n,) float for a scalar time, (n, len(times)) float for an array of times.
     """
     lap = as_laplacian(lap)
     T = _values(times, "times")
-    cols = [kernel_diagonal(lap, heat(as_positive(t, "time")), method=method, **kwargs)
-            for t in T.reshape(-1)]
+    Tv = T.reshape(-1)
+    for t in Tv:
+        as_positive(t, "time")
+    if _family(lap, method, Tv.size, kwargs):
+        return heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
+    cols = [kernel_diagonal(lap, heat(float(t)), method=method, **kwargs) for t in Tv]
     return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
+
+
+def _family(lap, method, count, kwargs) -> bool:
+    """Whether several filters go through the common-pole diagonals."""
+    from .diagonal import selinv_supported
+
+    if count < 2 or method not in ("auto", "selinv") or set(kwargs) - {"tol"}:
+        return False
+    return selinv_supported(lap, heat(1.0))
 
 
 def _wks_filter(e, sigma):
@@ -112,10 +131,14 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         Psi = np.exp(-((Ev[None, :] - np.log(lam)[:, None]) ** 2) / (2.0 * sigma ** 2))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
     else:
+        filts = [_wks_filter(float(e), sigma) for e in Ev]
+        if _family(lap, method, Ev.size, kwargs):
+            tol = kwargs.get("tol", 1e-8)
+            D = family_diagonals(lap, filts, max(tol * 1e-3, 1e-12), scales=np.exp(Ev)).values
+        else:
+            D = np.stack([np.real(kernel_diagonal(lap, f, method=method, **kwargs)) for f in filts], axis=1)
         cols = []
-        for e in Ev:
-            f = _wks_filter(float(e), sigma)
-            d = np.real(kernel_diagonal(lap, f, method=method, **kwargs))
+        for d in D.T:
             cols.append(d / float(lap.mass @ d))
         out = np.stack(cols, axis=1)
     return out[:, 0] if E.ndim == 0 else out
