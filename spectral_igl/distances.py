@@ -27,7 +27,8 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .kernels import kernel_columns
+from .diagonal.multiscale import heat_columns
+from .kernels import block_sources, kernel_columns
 from .laplacian import as_laplacian
 
 __all__ = [
@@ -241,7 +242,11 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     filt = check_filter(filt)
     delta = as_delta(delta)
     S = as_indices(seeds, lap.n, "seeds")
-    C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
+    if filt.kind == "heat" and block_sources(lap, method, delta, S.size):
+        # one factorization per pole, every seed in one block right-hand side
+        C = heat_columns(lap, [filt.params["t"]], S, tol=tol)[0][:, :, 0]
+    else:
+        C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()

@@ -21,7 +21,8 @@ from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
 from .laplacian import Laplacian, as_laplacian
 
-__all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK"]
+__all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
+           "block_sources", "MANY_SOURCES"]
 
 #: columns per engine call; bounds the (n, block) work arrays
 BLOCK = 64
@@ -141,7 +142,23 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     True
     """
     t = as_positive(t, "t")
+    lap = as_laplacian(lap)
+    idx, scalar = source_indices(sources, lap.n)
+    if block_sources(lap, method, as_delta(delta), idx.size):
+        return heat_kernels(lap, [t], idx, tol=tol)[:, :, 0]
     return spectral_kernel(lap, heat(t), sources, delta=delta, method=method, tol=tol)
+
+
+#: from this many sources on, ``method="auto"`` heat columns use the common-pole block solves
+MANY_SOURCES = 8
+
+
+def block_sources(lap, method, delta, m) -> bool:
+    """Whether m heat columns go through one factorization per pole with all sources as one
+    block (cheaper than m Krylov runs from m sources on)."""
+    from .linalg import ldlt
+
+    return method == "auto" and delta == "mass" and m >= MANY_SOURCES and ldlt.available()
 
 
 def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False):
@@ -161,8 +178,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
         Positive times.
     sources : int or (m,) int
     tol : float
-        Relative accuracy target of the heat diagonal at the same times (see
-        :func:`spectral_igl.diagonal.multiscale.heat_targets`).
+        Certified B-norm error of each column relative to :math:`\|B^{-1}e_i\|_B`.
     return_bound : bool
         Also return the (T,) certified :math:`\varepsilon_t`.
 

