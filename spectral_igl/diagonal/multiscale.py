@@ -113,9 +113,9 @@ def heat_poles(t1: float, t2: float, K: int | None = None):
 # ----------------------------------------------------------------------------- fits
 def _sample(a: float, b: float, scales=()) -> np.ndarray:
     lo = a if a > 0 else b * 1e-14
-    parts = [[a, b], np.linspace(a, b, 1500), np.geomspace(lo, b, 2500)]
+    parts = [[a, b], np.linspace(a, b, 400), np.geomspace(lo, b, 1200)]
     for s in scales:   # dense where the member varies
-        parts.append(np.clip(np.geomspace(s * 1e-4, s * 1e2, 800), a, b))
+        parts.append(np.clip(np.geomspace(s * 1e-4, s * 1e2, 400), a, b))
     x = np.unique(np.concatenate(parts))
     return x[(x >= a) & (x <= b)]
 
@@ -130,7 +130,7 @@ def _design(x, upper, real):
     return np.array(cols).T
 
 
-def _lawson(A, y, iterations=8):
+def _lawson(A, y, iterations=6):
     """Minimax-leaning least squares by QR (no singular-value truncation), Lawson weights."""
     scale = np.max(np.abs(A), axis=0)
     scale[scale == 0] = 1.0
