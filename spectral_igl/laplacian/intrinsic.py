@@ -37,7 +37,7 @@ def intrinsic_delaunay(l, F):
     >>> F = np.array([[0, 1, 2], [1, 0, 3]])
     >>> l2, F2 = intrinsic_delaunay(l, F)
     >>> sorted(map(int, F2[0])), round(float(l2[0, 1]), 6)
-    ([0, 2, 3], 0.624500)
+    ([0, 2, 3], 0.6245)
     """
     l = np.ascontiguousarray(l, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
