@@ -94,7 +94,7 @@ def run_task(args):
 
         sigma = 7.0 * (E[1] - E[0])
         filts = [_wks_filter(float(e), sigma) for e in E]
-        md = family_diagonals(lap, filts, 1e-10, scales=np.exp(E))
+        md = family_diagonals(lap, filts, 1e-9, scales=np.exp(E))
         out["time"] = time.perf_counter() - t0
         out["factorizations"] = md.n_factorizations
         out["bound_rel"] = float(np.max(md.abs_bound[checks] / np.abs(md.values[checks]).max(axis=0)))

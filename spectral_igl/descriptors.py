@@ -134,7 +134,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         filts = [_wks_filter(float(e), sigma) for e in Ev]
         if _family(lap, method, Ev.size, kwargs):
             tol = kwargs.get("tol", 1e-8)
-            D = family_diagonals(lap, filts, max(tol * 1e-2, 1e-12), scales=np.exp(Ev)).values
+            D = family_diagonals(lap, filts, max(tol * 1e-1, 1e-12), scales=np.exp(Ev)).values
         else:
             D = np.stack([np.real(kernel_diagonal(lap, f, method=method, **kwargs)) for f in filts], axis=1)
         cols = []
