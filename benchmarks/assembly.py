@@ -52,7 +52,8 @@ def rows_for_level(level, repeat, skip):
         ("anisotropic_laplacian", lambda: sig.anisotropic_laplacian(V, F, 1.0)),
         ("point_cloud_laplacian belkin", lambda: sig.point_cloud_laplacian(P, method="belkin")),
         ("point_cloud_laplacian liu", lambda: sig.point_cloud_laplacian(P, method="liu")),
-        ("point_cloud_laplacian belkin k=16", lambda: sig.point_cloud_laplacian(P, k=16)),
+        ("point_cloud_laplacian belkin k=16", lambda: sig.point_cloud_laplacian(P, k=16, method="belkin")),
+        ("point_cloud_laplacian delaunay", lambda: sig.point_cloud_laplacian(P)),
         ("voxel_laplacian", lambda: sig.voxel_laplacian(mask, 1.0 / side)),
         ("graph_laplacian", lambda: sig.graph_laplacian(n, E)),
     ]

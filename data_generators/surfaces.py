@@ -138,3 +138,38 @@ def sphere_points(n: int, seed: int = 0, nonuniform: float = 0.0, radius: float 
             P = P[rng.random(len(P)) * (1 + 2 * nonuniform) < dens]
         out = np.vstack([out, P])
     return radius * out[:n]
+
+
+def quad_sphere(n: int = 16, radius: float = 1.0):
+    """Cube-sphere quad mesh: each cube face an ``n × n`` grid, projected to the sphere.
+
+    The grid is equi-angular (``tan`` spacing), so the quads are close to squares of
+    similar size; faces are oriented outward. Returns ``V (6n² + 2, 3)`` and
+    ``Q (6n², 4)`` int. Its Laplacian spectrum tends to the sphere's ``l(l + 1)/r²``.
+    """
+    s = np.tan(np.linspace(-np.pi / 4, np.pi / 4, n + 1))
+    a, b = np.meshgrid(s, s, indexing="ij")
+    one = np.ones_like(a)
+    # (x, y, z) on each face with right-handed (a, b) so that a × b points outward
+    faces = [(one, a, b), (-one, b, a), (b, one, a), (a, -one, b), (a, b, one), (b, a, -one)]
+    pts, quads = [], []
+    for f, (x, y, z) in enumerate(faces):
+        P = np.stack([x, y, z], axis=-1).reshape(-1, 3)
+        idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1) + f * (n + 1) ** 2
+        q = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], axis=-1).reshape(-1, 4)
+        pts.append(P)
+        quads.append(q)
+    P = np.vstack(pts)
+    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    _, first, inv = np.unique(np.round(P, 12), axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    V = radius * P[first[order]]
+    Q = rank[inv.ravel()][np.vstack(quads)]
+    # orient outward: the normal of each quad's first corner against its centre
+    X = V[Q]
+    nrm = np.cross(X[:, 1] - X[:, 0], X[:, 3] - X[:, 0])
+    flip = np.einsum("ij,ij->i", nrm, X.mean(axis=1)) < 0
+    Q[flip] = Q[flip][:, ::-1]
+    return V, Q

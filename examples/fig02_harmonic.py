@@ -42,7 +42,7 @@ def main(argv=None):
         euler.append(m - s + M)
         extrema = set(np.asarray(cp.minima).tolist()) | set(np.asarray(cp.maxima).tolist())
         extrema_at_constraints.append(extrema <= set(fixed.tolist()))
-        images.append(C.render(out / f"fig02_harmonic_{count}.png", (V, F), f, kind="cyclic",
+        images.append(C.render(out / f"fig02_harmonic_{count}.png", (V, F), f, kind="sequential",
                                critical=cp, title=f"{count} constraints: m={m} M={M} s={s}",
                                window_size=(500, 500)))
     result = {"n": lap.n, "critical_counts": counts, "euler_characteristic": euler,

@@ -60,12 +60,12 @@ def main(argv=None):
     cam_w = [(W[j] / np.linalg.norm(W[j]) * 4.0 + np.array([0.0, 0.0, 1.5])).tolist(),
              W.mean(0).tolist(), (0.0, 0.0, 1.0)]
     images = [
-        C.render(out / "fig04_anisotropic_heat.png", [(V, F), (V, F)], [k0, k1], kind="cyclic",
+        C.render(out / "fig04_anisotropic_heat.png", [(V, F), (V, F)], [k0, k1], kind="sequential",
                  sources=[i], labels=["isotropic", f"anisotropic, alpha={alpha:g}"],
                  shared_scale=False, window_size=(900, 450), camera_position=cam, zoom=1.0,
                  title=None),
         C.render(out / f"fig04_anisotropic_heat_{name}.png", [(W, G), (W, G)], [kw0, kw1],
-                 kind="cyclic", sources=[j], labels=["isotropic", f"anisotropic, alpha={alpha:g}"],
+                 kind="sequential", sources=[j], labels=["isotropic", f"anisotropic, alpha={alpha:g}"],
                  shared_scale=False, window_size=(900, 450), camera_position=cam_w, zoom=1.0),
     ]
     result["images"] = images

@@ -51,7 +51,7 @@ def main(argv=None):
     ax.grid(True, which="both", lw=0.3)
     images = [C.savefig(fig, out / "fig07_17_time_vs_n.png")]
     k0 = sig.heat_kernel(lap, t, 0)
-    images.append(C.render(out / "fig07_heat_kernel.png", (V, F), k0, kind="cyclic",
+    images.append(C.render(out / "fig07_heat_kernel.png", (V, F), k0, kind="sequential",
                            sources=[0], title=f"heat kernel, t={t:g}, n={lap.n}"))
     # the spectrum-free column is the exact one of the discrete operator: compare on the
     # smallest shape with the dense eigendecomposition

@@ -34,10 +34,10 @@ def main(argv=None):
     mass = lap.B @ np.ones(lap.n)
     conservation = float(np.max(np.abs(K.T @ mass - 1.0)))
     symmetry = float(abs(K[j, 0] - K[i, 1]) / max(abs(K[j, 0]), 1e-300))
-    images = [C.render(out / "fig08_volumetric_heat_kernel.png", (V, T), K[:, 0], kind="cyclic",
-                       volume="clip", title=f"volumetric heat kernel, t={t:.3g}"),
-              C.render(out / "fig08_volumetric_heat_slices.png", (V, T), K[:, 0], kind="cyclic",
-                       volume="slices", title="slices")]
+    images = [C.render(out / "fig08_volumetric_heat_kernel.png", (V, T), K[:, 0], kind="sequential",
+                       sources=[i], volume="clip", title=f"volumetric heat kernel, t={t:.3g}"),
+              C.render(out / "fig08_volumetric_heat_slices.png", (V, T), K[:, 0], kind="sequential",
+                       sources=[i], volume="slices", title="slices")]
     result = {"n": lap.n, "t": t, "conservation_error": conservation,
               "symmetry_error": symmetry, "min": float(K[:, 0].min()), "images": images}
     return C.summary("fig08", result)

@@ -31,7 +31,7 @@ def main(argv=None):
         ds.append(C.spectral_distance(lap, filt, i, method=method))
     images = [C.render(out / "fig09_distances.png", [(V, F)] * len(cases), ds, kind="distance",
                        sources=[i], labels=[c[0] for c in cases], shared_scale=False,
-                       camera_position="iso", window_size=(1600, 420), zoom=1.3)]
+                       window_size=(1600, 420))]
     result = {"n": lap.n, "source_value_max": float(max(abs(d[i]) for d in ds)),
               "min_elsewhere": float(min(np.delete(d, i).min() for d in ds))}
     if lap.n <= 3000:  # dense ground truth of the discrete operator

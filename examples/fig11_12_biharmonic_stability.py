@@ -52,8 +52,8 @@ def main(argv=None):
     dh = C.biharmonic_distance(sig.laplacian(Vh, Fh), int(index[i]))
     panels.append((Vh, Fh)); fs.append(dh); labels.append("holes")
     images.append(C.render(out / "fig12_biharmonic_stability.png", panels, fs, kind="distance",
-                           sources=None, labels=labels, shared_scale=True,
-                           window_size=(1600, 420), zoom=1.3))
+                           sources=[[i], [i], [i], [int(index[i])]], labels=labels, shared_scale=True,
+                           window_size=(1600, 420)))
     ref = fs[0] / fs[0].max()
     kept = index >= 0
     result = {"n": ns, "sphere_relative_error": errors,

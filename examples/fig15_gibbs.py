@@ -56,7 +56,7 @@ def main(argv=None):
     images = [C.savefig(fig, out / "fig15_gibbs.png")]
     j = 0
     images.append(C.render(out / "fig15_truncated_kernel.png", [(V, F)] * 3,
-                           [exact[j], truncated[j], truncated[j] - exact[j]], kind="cyclic",
+                           [exact[j], truncated[j], truncated[j] - exact[j]], kind="diverging",
                            sources=[i], shared_scale=False,
                            labels=[f"spectrum-free, t={times[j]:.1e}", f"truncated, k={k}",
                                    "difference"], window_size=(1350, 450)))

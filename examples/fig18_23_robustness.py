@@ -69,10 +69,11 @@ def main(argv=None):
     cut = float(np.max(np.abs(dc - base[index >= 0])))
     images = [C.render(out / "fig18_23_robustness.png",
                        [(V, F), (V2, F2), (Vn, F), P, (Vc, Fc)], [base, d2, dn, dp, dc],
-                       kind="distance", labels=["input", "resampled", "noise", "point set, holes",
-                                                 "cut"], window_size=(1800, 380), zoom=1.3),
-              C.render(out / "fig20_heat_kernel_noisy.png", (Vn, F), kn, kind="cyclic",
-                       sources=[i], title=f"heat kernel on a noisy surface, t={t / 4:g}",
+                       kind="distance", sources=[[i], [j], [i], [0], [int(index[i])]],
+                       labels=["input", "resampled", "noise", "point set, holes", "cut"],
+                       window_size=(1800, 380)),
+              C.render(out / "fig20_heat_kernel_noisy.png", (Vn, F), kn, kind="sequential",
+                       sources=[i], title=f"heat kernel, noisy surface, t={t / 4:g}",
                        window_size=(500, 500))]
     result = {"n": len(V), "sampling_difference": sampling, "noise_difference": noise,
               "point_set_difference": points, "cut_difference": cut, "images": images}

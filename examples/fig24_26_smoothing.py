@@ -30,17 +30,17 @@ def main(argv=None):
     n0 = cp0.n_minima + cp0.n_maxima + cp0.n_saddles
     n1 = cp1.n_minima + cp1.n_maxima + cp1.n_saddles
     images = [C.render(out / "fig24_smoothing.png", [(V, F), (V, F), (V, F)],
-                       [clean, noisy, smoothed], kind="cyclic",
+                       [clean, noisy, smoothed], kind="diverging", n_levels=[12, 0, 12],
                        critical=None, labels=["clean", f"noisy: {n0} critical points",
                                               f"smoothed: {n1} critical points"],
-                       window_size=(1500, 500), zoom=1.3)]
+                       window_size=(1500, 500))]
     # Fig. 26: smoothing a noisy shape (the coordinates)
     Vn = C.add_noise(V, F, 0.5, seed=3)
     Vs = np.asarray(sig.diffusion_smooth(sig.laplacian(Vn, F), Vn, t))
     dev = [np.linalg.norm(W - V, axis=1) for W in (Vn, Vs)]
     images.append(C.render(out / "fig26_shape_smoothing.png", [(Vn, F), (Vs, F)], dev,
-                           kind="distance", labels=["noisy shape", "smoothed"],
-                           window_size=(1000, 500), zoom=1.3))
+                           kind="distance", labels=["noisy shape", "smoothed"], n_levels=[0, 12],
+                           window_size=(1000, 500)))
     err = lambda g: float(np.max(np.abs(g - clean)) / np.ptp(clean))  # noqa: E731
     result = {"n": lap.n, "t": t, "critical_before": n0, "critical_after": n1,
               "error_noisy": err(noisy), "error_smoothed": err(smoothed),

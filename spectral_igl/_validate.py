@@ -19,6 +19,8 @@ __all__ = [
     "as_positive",
     "as_nonnegative",
     "describe",
+    "as_mesh_arrays",
+    "is_mesh_object",
     "as_array",
     "as_delta",
     "DELTAS",
@@ -181,6 +183,155 @@ def as_nonnegative(x, name: str) -> float:
     return x
 
 
+# ---- mesh objects of other packages ------------------------------------------------------
+# VTK cell type ids (pyvista's ``cells_dict`` keys) and meshio's cell names
+_VTK_TRIANGLE, _VTK_TETRA = 5, 10
+
+
+def is_mesh_object(obj) -> bool:
+    """Whether ``obj`` looks like a pyvista, trimesh or meshio mesh (duck-typed).
+
+    Recognised: objects with ``points`` and ``faces`` (pyvista ``PolyData``), ``points``
+    and ``cells_dict`` (pyvista ``UnstructuredGrid``, ``meshio.Mesh``), or ``vertices``
+    (``trimesh.Trimesh``, ``trimesh.PointCloud``). Plain arrays, lists and tuples are not.
+    """
+    if isinstance(obj, (np.ndarray, list, tuple, str, bytes, dict)) or obj is None:
+        return False
+    return (hasattr(obj, "points") and (hasattr(obj, "faces") or hasattr(obj, "cells_dict"))) \
+        or hasattr(obj, "vertices")
+
+
+def _polydata_faces(faces, name: str) -> np.ndarray:
+    """Triangles from VTK's flat ``[k, i_1 .. i_k, k, ...]`` face list (fans for k > 3)."""
+    faces = np.asarray(faces, dtype=np.int64).ravel()
+    if faces.size == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    if faces.size % 4 == 0 and np.all(faces[::4] == 3):
+        return faces.reshape(-1, 4)[:, 1:].copy()
+    tris, i = [], 0
+    while i < faces.size:
+        k = int(faces[i])
+        if k < 3 or i + 1 + k > faces.size:
+            raise ValueError(f"{name}: malformed face list (a face with {k} vertices at offset {i})")
+        poly = faces[i + 1:i + 1 + k]
+        tris.extend((poly[0], poly[j], poly[j + 1]) for j in range(1, k - 1))
+        i += 1 + k
+    return np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+
+
+def _cells_from_dict(cells: dict, name: str) -> np.ndarray | None:
+    """Tetrahedra if there are any, else triangles, from a pyvista/meshio ``cells_dict``."""
+    def get(*keys):
+        for key, val in cells.items():
+            if key in keys or (isinstance(key, (int, np.integer)) and int(key) in keys):
+                return np.asarray(val)
+        return None
+
+    tets = get(_VTK_TETRA, "tetra")
+    if tets is not None and len(tets):
+        return tets
+    tris = get(_VTK_TRIANGLE, "triangle")
+    if tris is not None and len(tris):
+        return tris
+    if cells:
+        raise ValueError(f"{name} holds neither tetrahedra nor triangles (cell types "
+                         f"{sorted(str(k) for k in cells)}); triangulate it first")
+    return None
+
+
+def as_mesh_arrays(V, F=None, name: str = "V", need_cells: bool = True):
+    """``(V, F)`` arrays from a mesh object, or the arrays themselves.
+
+    Every public function that takes ``(V, F)`` passes its arguments through here, so it
+    also accepts a pyvista ``PolyData`` (polygons are fan-triangulated) or
+    ``UnstructuredGrid`` (its tetrahedra, else its triangles), a ``trimesh.Trimesh``,
+    a ``trimesh.PointCloud`` or a ``meshio.Mesh`` in place of ``V`` (with ``F`` omitted).
+    Neither package is imported: the objects are recognised by their attributes.
+
+    Parameters
+    ----------
+    V : (n, 3) float or mesh object
+        Vertex positions, or a mesh object.
+    F : (m, 3) or (m, 4) int, optional
+        Elements; must be omitted when ``V`` is a mesh object.
+    name : str
+        Name of ``V`` in error messages.
+    need_cells : bool
+        Raise when no elements result (``False`` for point clouds).
+
+    Returns
+    -------
+    V : (n, 3) array_like
+        The points (not yet validated: pass them to :func:`as_points`).
+    F : (m, 3) or (m, 4) array_like, or None
+        Triangles or tetrahedra; ``None`` when the object has no cells (a point cloud),
+        and ``F`` unchanged when ``V`` is not a mesh object.
+
+    Raises
+    ------
+    TypeError
+        ``V`` is a mesh object and ``F`` is given as well, or ``need_cells`` and there
+        are no elements.
+    ValueError
+        The object holds cells that are neither triangles, polygons nor tetrahedra.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl._validate import as_mesh_arrays
+    >>> class Tri:  # anything with .vertices and .faces, like trimesh.Trimesh
+    ...     vertices = np.eye(3); faces = np.array([[0, 1, 2]])
+    >>> V, F = as_mesh_arrays(Tri())
+    >>> V.shape, F.tolist()
+    ((3, 3), [[0, 1, 2]])
+    """
+    kind = type(V).__name__ if is_mesh_object(V) else None
+    V, F = _mesh_arrays(V, F, name)
+    if kind is not None and F is not None:
+        _warn_coincident(V, kind)
+    if need_cells and F is None:
+        raise TypeError(f"F is missing: pass (V, F) arrays, or a mesh object with triangles or "
+                        f"tetrahedra as {name}; got {name} = {describe(V)}")
+    return V, F
+
+
+def _warn_coincident(points, kind: str) -> None:
+    """Warn when points of a mesh object coincide: the object is cut along them.
+
+    File readers that split vertices at texture seams or normal creases (pyvista's and
+    trimesh's OBJ readers do) give such objects; every cut becomes a boundary.
+    """
+    import warnings
+
+    P = np.asarray(points)
+    if P.ndim != 2 or len(P) < 2:
+        return
+    dup = len(P) - len(np.unique(P, axis=0))
+    if dup:
+        warnings.warn(f"{dup} of the {len(P)} points of the {kind} coincide with another point, "
+                      f"so the shape is cut along them (a reader that splits vertices at texture "
+                      f"seams does this). Merge them first (pyvista: mesh.clean(); trimesh: "
+                      f"mesh.merge_vertices(merge_tex=True, merge_norm=True)) or read the file "
+                      f"with spectral_igl.io.read_mesh", RuntimeWarning, stacklevel=4)
+
+
+def _mesh_arrays(V, F, name):
+    if not is_mesh_object(V):
+        return V, F
+    what = f"{name} ({type(V).__module__.split('.')[0]}.{type(V).__name__})"
+    if F is not None:
+        raise TypeError(f"{name} is a mesh object ({type(V).__name__}): do not pass F as well, "
+                        f"got F = {describe(F)}")
+    if hasattr(V, "vertices") and not hasattr(V, "points"):          # trimesh
+        pts = np.asarray(V.vertices)
+        faces = getattr(V, "faces", None)
+        cells = None if faces is None or len(faces) == 0 else np.asarray(faces)
+        return pts, cells
+    pts = np.asarray(V.points)
+    if hasattr(V, "cells_dict") and not hasattr(V, "faces"):         # UnstructuredGrid, meshio
+        return pts, _cells_from_dict(dict(V.cells_dict), what)
+    tris = _polydata_faces(V.faces, what)                             # PolyData
+    return pts, (tris if len(tris) else None)
 def as_delta(delta) -> str:
     """Validate the ``delta`` argument of kernels and distances (one of :data:`DELTAS`)."""
     if not isinstance(delta, str) or delta not in DELTAS:

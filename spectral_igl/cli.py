@@ -3,7 +3,9 @@
 Jobs: ``kernel``, ``distance``, ``hks``, ``smooth``, ``geodesic``, ``view``, ``figures``.
 Meshes: ``.obj``, ``.off``, ``.ply``, ``.stl``, ``.wrl`` (triangles) and MEDIT ``.mesh``
 (tetrahedra); or a generated shape with ``--shape``. Outputs by extension: ``.npy``,
-``.csv``, ``.png`` (``--out`` may be repeated).
+``.csv`` (a header naming each column), ``.png``, and ``.vtu``/``.vtk``/``.ply``: the mesh
+with the result as point data, one array per column (``--out`` may be repeated). A
+progress bar is drawn on stderr unless ``--no-progress`` or ``--quiet`` is given.
 
 Exit codes
 ----------
@@ -23,14 +25,16 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
-from .applications import diffusion_smooth, geodesic_distance, optimal_time
+from .applications import diffusion_smooth, geodesic_distance, optimal_shape_time, optimal_time
 from .approx import METHODS
 from .descriptors import hks
 from .diagonal import METHODS as DIAGONAL_METHODS
 from .filters import FILTERS
 from .io import read_mesh, write_mesh
 from .laplacian import laplacian
-from .quantity import evaluate
+from .progress import enabled as progress_enabled
+from .progress import progress_bar
+from .quantity import QUANTITIES, color_meaning, evaluate
 
 __all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
@@ -38,7 +42,8 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
 
 _FILTERS = tuple(FILTERS)
 _METHODS = METHODS
-_OUTPUTS = (".npy", ".csv", ".png")
+_OUTPUTS = (".npy", ".csv", ".png", ".vtu", ".vtk", ".ply")
+_FIELD_MESHES = (".vtu", ".vtk", ".ply")
 _SHAPES = ("sphere", "box", "torus", "cylinder")
 
 
@@ -48,29 +53,6 @@ class CLIError(Exception):
     def __init__(self, message, code=EXIT_ERROR):
         super().__init__(message)
         self.code = code
-
-
-class Progress:
-    """A small text progress bar on stderr (only on a terminal, or when forced)."""
-
-    def __init__(self, total, label="", enabled=None, stream=None, width=28):
-        self.stream = stream or sys.stderr
-        self.enabled = (hasattr(self.stream, "isatty") and self.stream.isatty()) if enabled is None else enabled
-        self.total, self.label, self.width, self.done = max(int(total), 1), label, width, 0
-        self.start = time.perf_counter()
-
-    def step(self, text=""):
-        self.done = min(self.done + 1, self.total)
-        if not self.enabled:
-            return
-        frac = self.done / self.total
-        bar = "#" * int(round(frac * self.width))
-        elapsed = time.perf_counter() - self.start
-        self.stream.write(f"\r{self.label} [{bar:<{self.width}}] {100 * frac:3.0f}% "
-                          f"{elapsed:6.1f}s {text[:40]:<40}")
-        if self.done == self.total:
-            self.stream.write("\n")
-        self.stream.flush()
 
 
 # ---- argument parsing -------------------------------------------------------------------
@@ -120,9 +102,36 @@ def _input_args(p, outputs=_OUTPUTS):
                    help="mass matrix (default full: linear FEM)")
     p.add_argument("-o", "--out", action="append", default=[], metavar="FILE",
                    help=f"write the result; type by extension ({', '.join(outputs)}); repeatable")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    p.add_argument("--progress", action="store_true",
-                   help="show the progress bar even when stderr is not a terminal")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="print nothing on success (and draw no progress bar)")
+    _progress_arg(p)
+    _picture_args(p)
+
+
+def _progress_arg(p):
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True,
+                   help="progress bars on stderr, one step per factorization, pole, time or "
+                        "figure (default: on)")
+
+
+def _view(text):
+    from .viz import parse_view
+
+    try:
+        parse_view(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
+
+
+def _picture_args(p):
+    p.add_argument("--view", default="auto", type=_view, metavar="VIEW",
+                   help="camera of pictures: auto (face the source from outside the shape), "
+                        "iso, +x, -x, +y, -y, +z, -z, or a direction dx,dy,dz (default auto)")
+    p.add_argument("--cmap", default=None, metavar="NAME",
+                   help="colour map of pictures (a matplotlib name); default by meaning: "
+                        "sequential for distances and non-negative values, diverging centred "
+                        "at 0 for signed ones")
 
 
 def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area)"):
@@ -200,8 +209,9 @@ def build_parser():
                         "signal's range) -- for demonstrations")
     p.add_argument("--seed", type=int, default=0, help="seed of --noise")
     p.add_argument("-t", "--time", type=_positive, default=None,
-                   help="diffusion time (default: for --signal, the corner of the L-curve, "
-                        "optimal_time; for the shape itself, the squared mean edge length)")
+                   help="diffusion time (default: for --signal, the minimum of the estimated "
+                        "risk, optimal_time; for the shape itself, the same risk rule with the "
+                        "noise measured along the normals, optimal_shape_time)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_positive, default=1e-8)
@@ -221,7 +231,7 @@ def build_parser():
                                    "kernel/distance. With --screenshot it renders once off screen.")
     _input_args(p, outputs=())
     _engine_args(p, "biharmonic")
-    p.add_argument("--quantity", default="distance", choices=("distance", "kernel"))
+    p.add_argument("--quantity", default="distance", choices=QUANTITIES)
     p.add_argument("--screenshot", metavar="PNG", help="render off screen to this file and exit")
 
     p = sub.add_parser("figures", help="run the example scripts that draw the survey's figures",
@@ -233,7 +243,7 @@ def build_parser():
     p.add_argument("--list", action="store_true", help="list the scripts and exit")
     p.add_argument("--mesh", help="run the scripts on this mesh instead of generated shapes")
     p.add_argument("-q", "--quiet", action="store_true")
-    p.add_argument("--progress", action="store_true")
+    _progress_arg(p)
     return parser
 
 
@@ -297,7 +307,23 @@ def _volume_scale(lap):
     return float(np.sum((V.max(0) - V.min(0)) ** 2))
 
 
-def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
+def _column_names(values, names=None):
+    """Names of the columns of ``values`` (CSV header, fields of a mesh file)."""
+    k = 1 if values.ndim == 1 else values.shape[1]
+    if names is None:
+        names = ["value"] if k == 1 else [f"value{j}" for j in range(k)]
+    if len(names) != k:
+        raise ValueError(f"{len(names)} column names for {k} column(s)")
+    return list(names)
+
+
+def _write(outs, values, V, C, args, sources=None, kind="auto", title="", names=None):
+    """Write ``values`` (one row per vertex) to each output, by extension.
+
+    ``names`` name the columns: the CSV header, and the point-data arrays of a
+    ``.vtu``/``.vtk``/``.ply`` mesh (one array per column).
+    """
+    names = _column_names(values, names)
     for out in outs:
         path = Path(out)
         if path.parent and not path.parent.exists():
@@ -306,13 +332,17 @@ def _write(outs, values, V, C, args, sources=None, kind="distance", title=""):
         if ext == ".npy":
             np.save(path, values)
         elif ext == ".csv":
-            header = ",".join(f"value{j}" for j in range(values.shape[1])) if values.ndim == 2 else "value"
+            header = ",".join(names)
             np.savetxt(path, values, delimiter=",", header=header, comments="", fmt="%.10g")
         elif ext == ".png":
             from .viz import plot_levelsets
 
             f = values if values.ndim == 1 else values[:, values.shape[1] // 2]
-            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path)
+            plot_levelsets((V, C), f, kind=kind, sources=sources, title=title, filename=path,
+                           camera=getattr(args, "view", "auto"), cmap=getattr(args, "cmap", None))
+        elif ext in _FIELD_MESHES:
+            cols = [values] if values.ndim == 1 else [values[:, j] for j in range(values.shape[1])]
+            write_mesh(path, V, C, fields=dict(zip(names, cols)))
         else:
 
             write_mesh(path, values, C)
@@ -326,24 +356,29 @@ def _say(args, text):
 # ---- jobs ---------------------------------------------------------------------------------
 def _job_kernel_distance(args):
     _check_outputs(args.out, _OUTPUTS)
-    prog = Progress(4, args.job, enabled=(not args.quiet) and (args.progress or None))
+    prog = progress_bar(4, args.job, unit="step")
+    prog.set_postfix_str("reading")
     V, C, name = _load_shape(args)
-    prog.step("read")
+    prog.update()
+    prog.set_postfix_str("Laplacian")
     if args.source >= len(V):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
                        EXIT_USAGE)
     lap = _laplacian(V, C, args)
-    prog.step("Laplacian")
+    prog.update()
+    prog.set_postfix_str(args.job)
     t = args.time
     if FILTERS[args.filter][1] and t is None:
         t = _default_time(lap)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
-    prog.step("evaluated")
-    kind = "distance" if args.job == "distance" else "cyclic"
+    prog.update()
+    prog.set_postfix_str("writing")
+    kind = color_meaning(args.job, args.filter)
     _write(args.out, ev.values, V, C, args, sources=[args.source], kind=kind,
-           title=f"{ev.label} ({name})")
-    prog.step("written")
+           title=f"{ev.label} ({name})", names=[f"{args.filter}_{args.job}"])
+    prog.update()
+    prog.close()
     bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g}"
     _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
                f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; error bound {bound}; "
@@ -358,16 +393,12 @@ def _job_hks(args):
     times = args.times
     if times is None:
         times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
-    prog = Progress(len(times), "hks", enabled=(not args.quiet) and (args.progress or None))
-    cols = []
-    start = time.perf_counter()
-    for t in times:
-        cols.append(np.asarray(hks(lap, t, method=args.diagonal, engine_method=args.method,
-                                   tol=args.tol), dtype=float).reshape(lap.n))
-        prog.step(f"t={t:.3g}")
-    H = np.column_stack(cols)
+    start = time.perf_counter()     # one bar step per time (progress=None: the CLI's setting)
+    H = np.asarray(hks(lap, np.asarray(times, dtype=float), method=args.diagonal,
+                       engine_method=args.method, tol=args.tol), dtype=float).reshape(lap.n, len(times))
     seconds = time.perf_counter() - start
-    _write(args.out, H, V, C, args, kind="cyclic", title=f"HKS t={times[len(times) // 2]:.3g} ({name})")
+    _write(args.out, H, V, C, args, kind="sequential", title=f"HKS t={times[len(times) // 2]:.3g} ({name})",
+           names=[f"t={t:.4g}" for t in times])
     _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
@@ -392,12 +423,14 @@ def _read_signal(path, n):
 
 
 def _job_smooth(args):
-    mesh_types = (".obj", ".off", ".ply", ".stl")
-    _check_outputs(args.out, _OUTPUTS + mesh_types)
+    plain_meshes = (".obj", ".off", ".stl")
+    mesh_types = plain_meshes + _FIELD_MESHES
+    _check_outputs(args.out, _OUTPUTS + plain_meshes)
     geometry = args.signal is None
-    if not geometry and any(Path(o).suffix.lower() in mesh_types for o in args.out):
-        raise CLIError("a mesh can only be written when smoothing the shape itself (no --signal)",
-                       EXIT_USAGE)
+    if not geometry and any(Path(o).suffix.lower() in plain_meshes for o in args.out):
+        raise CLIError("a mesh can only be written to .obj, .off or .stl when smoothing the shape "
+                       "itself (no --signal); write the smoothed signal with its mesh to .vtu, "
+                       ".vtk or .ply", EXIT_USAGE)
     V, C, name = _load_shape(args)
     f = _read_signal(args.signal, len(V)) if not geometry else V.copy()
     if args.noise:
@@ -408,13 +441,13 @@ def _job_smooth(args):
         V = f.copy()
     lap = _laplacian(V, C, args)
     t = args.time
-    if t is None and geometry:
-        # the coordinates are smooth functions (on a sphere, eigenfunctions): their L-curve
-        # corner is where the shape itself shrinks away; smooth at the scale of an edge
-        E = C[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2) if C.shape[1] == 3 else \
-            C[:, [0, 1, 0, 2, 0, 3, 1, 2, 1, 3, 2, 3]].reshape(-1, 2)
-        t = float(np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))) ** 2
-    elif t is None:  # the L-curve corner, per column for several columns (their median)
+    if t is None and geometry and C.shape[1] == 3:
+        # the risk rule with the shape's normal noise (the noisy operator hides it)
+        t = optimal_shape_time(lap)[0]
+    elif t is None and geometry:
+        # tetrahedra: no normal noise to measure; the risk rule per coordinate (median)
+        t = float(np.median([optimal_time(lap, c)[0] for c in f.T]))
+    elif t is None:  # the minimum of the estimated risk, per column (their median)
         cols = f.reshape(lap.n, -1).T
         t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
@@ -422,15 +455,20 @@ def _job_smooth(args):
     seconds = time.perf_counter() - start
     if geometry:
         mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
-        _write(mesh_outs, g, V, C, args)
+        for o in mesh_outs:    # the smoothed shape (with its displacement where fields fit)
+            Path(o).parent.mkdir(parents=True, exist_ok=True)
+            fields = {"displacement": np.linalg.norm(g - V, axis=1)} \
+                if Path(o).suffix.lower() in _FIELD_MESHES else None
+            write_mesh(o, g, C, fields=fields)
         other = [o for o in args.out if o not in mesh_outs]
         pics = [o for o in other if o.lower().endswith(".png")]
-        _write([o for o in other if o not in pics], g, V, C, args)
+        _write([o for o in other if o not in pics], g, V, C, args, names=["x", "y", "z"][:g.shape[1]])
         for o in pics:  # the smoothed shape, coloured by displacement
             _write([o], np.linalg.norm(g - V, axis=1), g, C, args, kind="distance",
                    title=f"smoothed, t={t:.3g} (colour: displacement)")
     else:
-        _write(args.out, g, V, C, args, kind="cyclic", title=f"smoothed, t={t:.3g}")
+        _write(args.out, g, V, C, args, kind="auto", title=f"smoothed, t={t:.3g}",
+               names=["smoothed"] if g.ndim == 1 else [f"smoothed{j}" for j in range(g.shape[1])])
     _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
@@ -447,7 +485,7 @@ def _job_geodesic(args):
     d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
     seconds = time.perf_counter() - start
     _write(args.out, d, V, C, args, sources=[args.source], kind="distance",
-           title=f"geodesic distance ({args.method}) ({name})")
+           title=f"geodesic distance ({args.method}) ({name})", names=["geodesic_distance"])
     _say(args, f"geodesic distance ({args.method}) from vertex {args.source} on {name} "
                f"({lap.n} vertices): max {d.max():.6g}; {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
@@ -456,7 +494,11 @@ def _job_geodesic(args):
 
 def _job_view(args):
     from .viz import Viewer
+    from .viz import display_available
 
+    if args.screenshot is None and not display_available():  # before any work
+        raise CLIError("no display available for the interactive viewer: use "
+                       "--screenshot FILE.png to render off screen", EXIT_USAGE)
     V, C, name = _load_shape(args)
     if args.source >= len(V):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
@@ -466,18 +508,13 @@ def _job_view(args):
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
                     source=args.source, tol=args.tol, off_screen=True if off else None,
-                    diagonal=args.diagonal)
+                    diagonal=args.diagonal, camera=args.view, cmap=args.cmap)
     if off:
         Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")
         return EXIT_OK
-    from .viz import headless
-
-    if headless():
-        raise CLIError("no display available: use --screenshot FILE.png to render off screen",
-                       EXIT_USAGE)
     viewer.show()
     return EXIT_OK
 
@@ -511,7 +548,7 @@ def _job_figures(args):
                            f"{', '.join(names)}", EXIT_USAGE)
         scripts = [p for p in scripts if any(p.stem == n or p.stem.startswith(n + "_") for n in args.only)]
     sys.path.insert(0, str(d))
-    prog = Progress(len(scripts), "figures", enabled=(not args.quiet) and (args.progress or None))
+    prog = progress_bar(len(scripts), "figures", unit="figure")
     failed = []
     for p in scripts:
         spec = importlib.util.spec_from_file_location(p.stem, p)
@@ -524,7 +561,9 @@ def _job_figures(args):
         except Exception as err:  # report and go on with the other figures
             failed.append(p.stem)
             print(f"{p.stem}: failed: {type(err).__name__}: {err}", file=sys.stderr)
-        prog.step(p.stem)
+        prog.set_postfix_str(p.stem)
+        prog.update()
+    prog.close()
     if failed:
         print(f"{len(failed)} of {len(scripts)} figure script(s) failed: {', '.join(failed)}",
               file=sys.stderr)
@@ -546,7 +585,8 @@ def main(argv=None) -> int:
     except SystemExit as exc:  # --help, --version, usage errors
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
     try:
-        return _JOBS[args.job](args)
+        with progress_enabled(bool(getattr(args, "progress", False)) and not getattr(args, "quiet", False)):
+            return _JOBS[args.job](args)
     except CLIError as err:
         print(f"spectral-igl {args.job}: error: {err}", file=sys.stderr)
         return err.code

@@ -8,7 +8,8 @@ from .diagonal import kernel_diagonal
 from .diagonal.multiscale import family_diagonals, heat_diagonals
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian
-from .linalg import cached_eigs
+from .linalg import cached_eigs, dense_eigs
+from .progress import progress_bar
 
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
 
@@ -45,10 +46,23 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     return kernel_diagonal(lap, filt, method=method, **kwargs)
 
 
-def hks(lap, times, method: str = "auto", **kwargs):
+def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     r"""Heat kernel signature (Sun et al. 2009) at one or several times.
 
     .. math:: HKS(i, t) = K_t(i, i) = \sum_l e^{-t\lambda_l}\, x_l(i)^2
+
+    Parameters
+    ----------
+    lap : Laplacian
+    times : float or (T,) float
+        Diffusion times.
+    method : str
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal`.
+    progress : bool, optional
+        A progress bar on stderr, one step per time, with the diagonal's own bar (per
+        pole) under it (see :mod:`spectral_igl.progress`; default off).
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
 
     Several times with ``method="auto"`` or ``"selinv"`` share one set of poles
     (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
@@ -66,7 +80,12 @@ def hks(lap, times, method: str = "auto", **kwargs):
         as_positive(t, "time")
     if _family(lap, method, Tv.size, kwargs):
         return heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
-    cols = [kernel_diagonal(lap, heat(float(t)), method=method, **kwargs) for t in Tv]
+    cols = []
+    with progress_bar(T.size, "hks", progress, unit="time") as bar:
+        for t in Tv:
+            cols.append(kernel_diagonal(lap, heat(float(t)), method=method, progress=progress, **kwargs))
+            bar.set_postfix_str(f"t={t:.3g}")
+            bar.update()
     return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
 
 
@@ -89,7 +108,33 @@ def _wks_filter(e, sigma):
     return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=False, key=("wks", e, sigma))
 
 
-def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen", **kwargs):
+#: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)
+WKS_TRACE_PROBES = 64
+#: largest n whose WKS normaliser (full mass) comes from the dense spectrum
+WKS_DENSE_MAX = 3000
+
+
+def _wks_trace(lap, f, diag):
+    r""":math:`\operatorname{tr}\psi(\tilde L) = \operatorname{tr}(KB)`, K the kernel whose diagonal is ``diag``.
+
+    Lumped mass: :math:`\sum_i m_i K_{ii}`, exact. Full mass: :math:`\operatorname{tr}(KB)`
+    also needs :math:`K_{ij}` on the edges, so the spectrum is used below the dense limit
+    (exact) and Hutchinson's estimate :math:`\mathbb E[z^\top\psi(\tilde L)z]` above it.
+    """
+    if lap.lumped:
+        return float(lap.mass @ diag)
+    if lap.n <= WKS_DENSE_MAX:
+        lam = np.asarray(dense_eigs(lap)[0])
+        return float(np.sum(f(np.maximum(lam, 0.0))))
+    from .approx import apply_filter
+
+    Z = np.random.default_rng(0).choice([-1.0, 1.0], size=(lap.n, WKS_TRACE_PROBES))
+    Y = np.real(apply_filter(lap, f, Z))
+    return float(np.mean(np.einsum("ij,ij->j", Z, Y)))
+
+
+def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen",
+        progress=None, **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
 
     .. math:: WKS(i, e) = \frac{\sum_l \psi_e(\lambda_l)\, x_l(i)^2}{\sum_l \psi_e(\lambda_l)},
@@ -107,9 +152,20 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
     method : {"eigen", "auto", "selinv", "exact", "probing", "dense"}
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
-        :math:`\psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
-        :math:`\operatorname{tr}\psi_e(\tilde L)` is then :math:`\sum_i m_i K(i,i)`,
-        exact for a lumped mass matrix.
+        :math:`K = \psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
+        :math:`\operatorname{tr}\psi_e(\tilde L) = \operatorname{tr}(KB)` is then
+        :math:`\sum_i m_i K(i,i)` for a lumped mass matrix (exact); for a full mass matrix
+        :math:`\operatorname{tr}(KB) \ne \sum_i m_i K(i,i)` (the off-diagonal
+        :math:`K_{ij}B_{ij}` differ, by a factor of about 2 at high energies), so it is
+        :math:`\sum_l \psi_e(\lambda_l)` from the dense spectrum for
+        :math:`n \le` ``WKS_DENSE_MAX`` = 3000 (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
+        Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
+        :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
+    progress : bool, optional
+        Spectrum-free methods: a progress bar on stderr, one step per energy (see
+        :mod:`spectral_igl.progress`; default off).
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
 
     Returns
     -------
@@ -132,14 +188,19 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
     else:
         filts = [_wks_filter(float(e), sigma) for e in Ev]
+        D = None
         if _family(lap, method, Ev.size, kwargs):
+            # common poles for all energies (set-valued AAA), each energy certified
             tol = kwargs.get("tol", 1e-8)
             D = family_diagonals(lap, filts, max(tol * 1e-1, 1e-12), scales=np.exp(Ev)).values
-        else:
-            D = np.stack([np.real(kernel_diagonal(lap, f, method=method, **kwargs)) for f in filts], axis=1)
         cols = []
-        for d in D.T:
-            cols.append(d / float(lap.mass @ d))
+        bar = progress_bar(Ev.size, "wks", progress, unit="energy")
+        for k, f in enumerate(filts):
+            d = D[:, k] if D is not None else np.real(kernel_diagonal(lap, f, method=method,
+                                                                       progress=progress, **kwargs))
+            cols.append(d / _wks_trace(lap, f, d))
+            bar.update()
+        bar.close()
         out = np.stack(cols, axis=1)
     return out[:, 0] if E.ndim == 0 else out
 

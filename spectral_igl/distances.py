@@ -18,6 +18,7 @@ import numpy as np
 from ._validate import as_delta, as_index, as_indices, as_positive
 from .approx import spectral_operator
 from .diagonal import EXACT_MAX, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal.multiscale import heat_columns
 from .filters import (
     biharmonic,
     check_filter,
@@ -27,9 +28,9 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .diagonal.multiscale import heat_columns
 from .kernels import block_sources, kernel_columns
 from .laplacian import as_laplacian
+from .progress import progress_bar
 
 __all__ = [
     "spectral_distance",
@@ -41,6 +42,12 @@ __all__ = [
     "polyharmonic_distance",
     "wave_distance",
     "mexican_hat_distance",
+    "pairwise_diffusion_distance",
+    "pairwise_commute_time_distance",
+    "pairwise_biharmonic_distance",
+    "pairwise_polyharmonic_distance",
+    "pairwise_wave_distance",
+    "pairwise_mexican_hat_distance",
 ]
 
 BLOCK = 64
@@ -72,7 +79,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
                       distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
                       max_colours: int | None = None, max_recompute: int | None = None,
-                      return_info: bool = False):
+                      return_info: bool = False, progress=None):
     r"""Spectral distance from ``source`` to ``targets`` (one, many, or all vertices).
 
     .. math:: d(i, j) = \|\varphi(\tilde L) B^{-1}(e_i - e_j)\|_B
@@ -107,6 +114,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         distance was recomputed exactly as a norm), ``unverified`` and, for one-to-all,
         ``d2_error_bound`` (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the
         diagonal is exact; then :math:`|d - \tilde d| \le` its square root).
+    progress : bool, optional
+        One-to-all: a progress bar on stderr over the diagonal's poles or blocks (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
@@ -144,7 +154,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     G2 = filt.square
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
-                                  engine_method=method, return_info=True)
+                                  engine_method=method, return_info=True, progress=progress)
     diag = np.real(diag)
     info.update(dinfo)
     e = np.zeros((n, 1))
@@ -225,14 +235,37 @@ def _eigen_distance(lap, filt, s, k, delta):
 
 
 def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: str = "auto",
-                               tol: float = 1e-8):
+                               tol: float = 1e-8, progress=None, block: int = 16):
     r"""(m, m) spectral distances between all pairs of ``seeds``.
 
     .. math:: D_{ab} = \|\varphi(\tilde L)B^{-1}(e_{s_a} - e_{s_b})\|_B
 
+    The filter is :math:`\varphi` itself and the distance uses :math:`|\varphi|^2`, as in
+    :func:`spectral_distance`: ``pairwise_spectral_distance(lap, filters.heat(t), S)`` is
+    the diffusion distance at time :math:`2t`, since :math:`|e^{-ts}|^2 = e^{-2ts}`. For
+    the named distances use :func:`pairwise_diffusion_distance` (time ``t`` as in
+    :func:`diffusion_distance`), :func:`pairwise_biharmonic_distance`, ..., which pass
+    the filter whose square is the named one.
+
     From the m kernel columns :math:`C = \varphi(\tilde L)B^{-1}E_S` (m engine
     applications) and their Gram matrix :math:`C^* B C`; any entry lost to cancellation
     is recomputed as the norm of the column difference, so the result is never negative.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    filt : Filter
+    seeds : (m,) int
+        Vertex indices.
+    delta : {"mass", "seed"}
+        As in :func:`spectral_distance`.
+    method, tol
+        Engine approximation method and accuracy.
+    progress : bool, optional
+        A progress bar on stderr, one step per block of ``block`` seeds (see
+        :mod:`spectral_igl.progress`; default off).
+    block : int
+        Kernel columns computed together: one step of the bar.
 
     Returns
     -------
@@ -246,7 +279,14 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
         # one factorization per pole, every seed in one block right-hand side
         C = heat_columns(lap, [filt.params["t"]], S, tol=tol)[0][:, :, 0]
     else:
-        C = kernel_columns(lap, filt, S, delta=delta, method=method, tol=tol)
+        op = spectral_operator(lap, filt, method, tol)
+        blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
+        with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
+            cols = []
+            for blk in blocks:
+                cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
+                bar.update()
+        C = np.concatenate(cols, axis=1)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()
@@ -376,3 +416,56 @@ class OneToAll:
 
     def __repr__(self) -> str:
         return f"OneToAll({self.filter!r}, n={self.lap.n}, diagonal={self.info.get('method')!r})"
+
+
+# ---------------------------------------------------------------------------------------
+# named pairwise distances: the same filters as the one-to-all functions above
+# ---------------------------------------------------------------------------------------
+def pairwise_diffusion_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) diffusion distances at time ``t`` between ``seeds``; entries equal
+    :func:`diffusion_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l e^{-t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+
+    (the filter passed to :func:`pairwise_spectral_distance` is ``heat(t / 2)``).
+    Keyword arguments as in :func:`pairwise_spectral_distance`.
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, heat(t / 2.0), seeds, **kwargs)
+
+
+def pairwise_commute_time_distance(lap, seeds, **kwargs):
+    r"""(m, m) commute-time distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-1}|x_l(s_a)-x_l(s_b)|^2`;
+    entries equal :func:`commute_time_distance`."""
+    return pairwise_spectral_distance(lap, commute_time(), seeds, **kwargs)
+
+
+def pairwise_biharmonic_distance(lap, seeds, **kwargs):
+    r"""(m, m) biharmonic distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-2}|x_l(s_a)-x_l(s_b)|^2`;
+    entries equal :func:`biharmonic_distance`."""
+    return pairwise_spectral_distance(lap, biharmonic(), seeds, **kwargs)
+
+
+def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
+    r"""(m, m) poly-harmonic distances of order ``k``,
+    :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2`; entries equal
+    :func:`polyharmonic_distance`."""
+    return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
+
+
+def pairwise_wave_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) wave-kernel distances, :math:`|\varphi|^2 = 1`; entries equal :func:`wave_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, wave(t), seeds, **kwargs)
+
+
+def pairwise_mexican_hat_distance(lap, t, seeds, **kwargs):
+    r"""(m, m) Mexican-hat distances; entries equal :func:`mexican_hat_distance`.
+
+    .. math:: D_{ab}^2 = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+    """
+    t = as_positive(t, "t")
+    return pairwise_spectral_distance(lap, mexican_hat(t), seeds, **kwargs)

@@ -227,12 +227,27 @@ def polyharmonic(k) -> Filter:
     return _power(int(k) / 2.0, f"polyharmonic{int(k)}")
 
 
-def mexican_hat(t) -> Filter:
-    r"""Mexican-hat filter, :math:`\varphi(s) = t s\, e^{-ts}` (band-pass, 0 at s = 0).
+def mexican_hat(t, form: str = "tse") -> Filter:
+    r"""Mexican-hat filter (band-pass, 0 at s = 0), in one of two forms in use.
 
-    .. math:: \varphi(\tilde L) = t \tilde L e^{-t\tilde L}
+    ``form="tse"`` (default): :math:`\varphi(s) = t s\, e^{-ts}`, i.e.
+    :math:`\varphi(\tilde L) = t \tilde L e^{-t\tilde L}`.
+    ``form="survey"``: the survey's (Hou and Qin 2012) :math:`\varphi(s) = s^{1/2}e^{-s^2}`
+    at scale ``t``,
+
+    .. math:: \varphi_t(s) = (ts)^{1/2} e^{-(ts)^2}, \qquad |\varphi_t|^2(s) = ts\, e^{-2(ts)^2}
     """
     t = as_positive(t, "t")
+    if form == "survey":
+        def fn(s):
+            u = t * np.maximum(np.asarray(s, dtype=float), 0.0)
+            return np.sqrt(u) * np.exp(-u * u)
+        return Filter(fn, name="mexican_hat_survey", kind="mexican_hat", params={"t": t, "form": "survey"},
+                      square=lambda: Filter(lambda s: t * np.maximum(s, 0.0) * np.exp(-2.0 * (t * s) ** 2),
+                                            name="mexican_hat_survey^2",
+                                            key=("square", "mexican_hat_survey", t)))
+    if form != "tse":
+        raise ValueError(f"form must be 'tse' or 'survey', got {form!r}")
     return Filter(lambda s: t * s * np.exp(-t * s), name="mexican_hat", kind="mexican_hat",
                   params={"t": t}, derivative=lambda s: t * (1.0 - t * s) * np.exp(-t * s),
                   square=lambda: Filter(lambda s: (t * s) ** 2 * np.exp(-2.0 * t * s), name="mexican_hat^2",

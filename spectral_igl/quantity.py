@@ -15,10 +15,42 @@ from .approx import spectral_operator
 from .distances import spectral_distance
 from .filters import FILTERS, by_name
 
-__all__ = ["QUANTITIES", "evaluate", "Evaluation"]
+__all__ = ["QUANTITIES", "FILTERED", "evaluate", "Evaluation", "uses_time", "color_meaning"]
 
 #: what :func:`evaluate` computes
-QUANTITIES = ("kernel", "distance")
+QUANTITIES = ("kernel", "distance", "geodesic")
+#: quantities whose value depends on the spectral filter (the geodesic distance does not)
+FILTERED = ("kernel", "distance")
+#: filters whose kernels are non-negative quantities (their rare small negative values are
+#: discretisation artefacts, drawn at the low end of a sequential scale)
+POSITIVE_KERNELS = ("heat", "diffusion")
+
+
+def color_meaning(quantity: str, filter: str) -> str:
+    """The colour reading of a picture: ``"sequential"`` or ``"auto"`` (diverging if signed).
+
+    Distances and heat kernels are non-negative quantities; the other kernels (biharmonic,
+    commute time, wave, Mexican hat) take both signs.
+
+    Examples
+    --------
+    >>> color_meaning("distance", "biharmonic"), color_meaning("kernel", "biharmonic")
+    ('sequential', 'auto')
+    """
+    if quantity != "kernel" or filter in POSITIVE_KERNELS:
+        return "sequential"
+    return "auto"
+
+
+def uses_time(quantity: str, filter: str) -> bool:
+    """Whether the picture of ``quantity`` with ``filter`` depends on a time/scale t.
+
+    Examples
+    --------
+    >>> uses_time("kernel", "heat"), uses_time("kernel", "biharmonic"), uses_time("geodesic", "heat")
+    (True, False, False)
+    """
+    return quantity in FILTERED and filter in FILTERS and bool(FILTERS[filter][1])
 
 
 class Evaluation:
@@ -50,9 +82,11 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     Parameters
     ----------
     lap : Laplacian
-    quantity : {"kernel", "distance"}
+    quantity : {"kernel", "distance", "geodesic"}
         ``"kernel"``: :math:`K(\cdot, i) = \varphi(\tilde L) B^{-1} e_i`;
-        ``"distance"``: :math:`d(i, \cdot)`, the spectral distance of :math:`\varphi`.
+        ``"distance"``: :math:`d(i, \cdot)`, the spectral distance of :math:`\varphi`;
+        ``"geodesic"``: the geodesic distance by the heat method (``filter`` and ``t`` are
+        not used).
     source : int
         Vertex ``i``.
     filter : str
@@ -77,6 +111,12 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     source = as_index(source, lap.n, "source")
+    if quantity == "geodesic":
+        from .applications.geodesics import geodesic_distance
+
+        start = time.perf_counter()
+        values = np.asarray(geodesic_distance(lap, source), dtype=float).ravel()
+        return Evaluation(values, None, time.perf_counter() - start, "geodesic distance (heat method)")
     filt = by_name(filter, t, order)
     label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter][1] else "")
     start = time.perf_counter()

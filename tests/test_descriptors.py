@@ -104,6 +104,42 @@ def test_wks(lap_torus):
     assert np.abs(W2 - ref).max() <= 1e-6 * ref.max()
 
 
+@pytest.mark.parametrize("mass", ["full", "lumped"])
+def test_wks_every_mass_matrix_against_dense(mass):
+    """WKS = sum_l psi(lam_l) x_l(i)^2 / sum_l psi(lam_l) with the B-orthonormal dense basis."""
+    lap = sig.laplacian(*torus(16, 8, jitter=0.3, seed=5), mass=mass)
+    lam, X = sig.dense_eigs(lap)
+    E = np.linspace(np.log(lam[1]), np.log(lam[-1]), 5)
+    sigma = 0.4
+    psi = np.exp(-((E[None] - np.log(np.maximum(lam[1:, None], 1e-300))) ** 2) / (2 * sigma ** 2))
+    ref = (X[:, 1:] ** 2) @ psi / psi.sum(axis=0)
+    for method in ("exact", "auto"):
+        W = sig.wks(lap, E, sigma=sigma, method=method)
+        assert np.abs(W - ref).max() <= 1e-6 * ref.max(), (mass, method)
+    W = sig.wks(lap, E, sigma=sigma, k=lap.n - 1)
+    assert np.abs(W - ref).max() <= 1e-8 * ref.max()
+    # each column integrates to 1 against tr(KB) = sum_l psi_l: with a full mass matrix the
+    # lumped sum m @ WKS is not 1 at high energies (the error this test guards against)
+    if mass == "full":
+        assert abs(float(lap.mass @ ref[:, -1]) - 1.0) > 0.2
+
+
+def test_wks_trace_estimate_above_the_dense_limit(monkeypatch):
+    import spectral_igl.descriptors as D
+
+    lap = sig.laplacian(*torus(16, 8, jitter=0.3, seed=5))
+    lam, X = sig.dense_eigs(lap)
+    E = np.log(lam[[len(lam) // 4, len(lam) // 2]])
+    psi = np.exp(-((E[None] - np.log(np.maximum(lam[1:, None], 1e-300))) ** 2) / (2 * 0.4 ** 2))
+    ref = (X[:, 1:] ** 2) @ psi / psi.sum(axis=0)
+    monkeypatch.setattr(D, "WKS_DENSE_MAX", 10)  # force the trace estimate
+    W = sig.wks(lap, E, sigma=0.4, method="exact")
+    # the diagonal is exact, the normaliser an estimate: one factor per column
+    ratio = W / ref
+    assert np.allclose(ratio, ratio[0], rtol=1e-6)
+    assert np.all(np.abs(ratio[0] - 1) < 0.1)
+
+
 def test_adf_scale_invariant(lap_torus):
     V, Fc = lap_torus.data["V"], lap_torus.data["F"]
     a = sig.auto_diffusion_function(lap_torus, [0.1, 1.0])

@@ -64,6 +64,42 @@ def test_pairwise(lap_torus):
     assert np.all(D == D.T) and np.all(np.diag(D) == 0)
 
 
+NAMED_PAIRWISE = [
+    ("diffusion", lambda lap, S: sig.pairwise_diffusion_distance(lap, 0.01, S),
+     lambda lap, s: sig.diffusion_distance(lap, 0.01, s)),
+    ("commute_time", lambda lap, S: sig.pairwise_commute_time_distance(lap, S),
+     lambda lap, s: sig.commute_time_distance(lap, s)),
+    ("biharmonic", lambda lap, S: sig.pairwise_biharmonic_distance(lap, S),
+     lambda lap, s: sig.biharmonic_distance(lap, s)),
+    ("polyharmonic", lambda lap, S: sig.pairwise_polyharmonic_distance(lap, 3, S),
+     lambda lap, s: sig.polyharmonic_distance(lap, 3, s)),
+    ("wave", lambda lap, S: sig.pairwise_wave_distance(lap, 0.3, S),
+     lambda lap, s: sig.wave_distance(lap, 0.3, s)),
+    ("mexican_hat", lambda lap, S: sig.pairwise_mexican_hat_distance(lap, 0.05, S),
+     lambda lap, s: sig.mexican_hat_distance(lap, 0.05, s)),
+]
+
+
+@pytest.mark.parametrize("name,pair,one", NAMED_PAIRWISE, ids=[c[0] for c in NAMED_PAIRWISE])
+def test_named_pairwise_equals_one_to_all(lap_torus, name, pair, one):
+    lap = lap_torus
+    seeds = [1, 30, 60, 99, 150]
+    D = pair(lap, seeds)
+    for a, s in enumerate(seeds):
+        row = one(lap, s)[seeds]
+        assert np.abs(D[a] - row).max() <= 1e-6 * row.max(), name
+    assert np.all(D == D.T) and np.all(np.diag(D) == 0)
+
+
+def test_pairwise_heat_filter_is_diffusion_at_twice_the_time(lap_torus):
+    """The documented factor 2: the filter heat(t) gives |phi|^2 = e^{-2ts}."""
+    lap = lap_torus
+    seeds = [1, 30, 60]
+    D = sig.pairwise_spectral_distance(lap, F.heat(0.01), seeds)
+    assert np.allclose(D, sig.pairwise_diffusion_distance(lap, 0.02, seeds), rtol=1e-8, atol=0)
+    assert not np.allclose(D, sig.pairwise_diffusion_distance(lap, 0.01, seeds), rtol=1e-3)
+
+
 def test_eigen_baseline_converges_to_exact(lap_torus):
     lap = lap_torus
     exact = sig.biharmonic_distance(lap, 3)
@@ -167,3 +203,12 @@ def test_bad_input(lap_torus):
         sig.biharmonic_distance(lap_torus, 0, targets=[0, lap_torus.n])
     with pytest.raises(ValueError):
         sig.diffusion_distance(lap_torus, 0.0, 0)
+
+
+def test_survey_mexican_hat_distance_against_dense(lap_torus):
+    lap = lap_torus
+    filt = F.mexican_hat(0.05, form="survey")
+    fn = lambda x: np.sqrt(0.05 * np.maximum(x, 0)) * np.exp(-(0.05 * x) ** 2)  # noqa: E731
+    ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, 5, False), 0))
+    d = sig.spectral_distance(lap, filt, 5)
+    assert np.abs(d - ref).max() <= 1e-6 * ref.max()

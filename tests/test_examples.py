@@ -17,7 +17,8 @@ SCRIPTS = [
     "fig02_harmonic", "fig03_eigenfunctions", "fig04_anisotropic_heat", "fig05_lcurve",
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
-    "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing",
+    "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
+    "fig26_truncated_smoothing", "fig_mcf",
 ]
 
 
@@ -70,10 +71,37 @@ def test_fig02_harmonic(tmp_path):
 def test_fig03_eigenfunctions(tmp_path):
     r = run("fig03_eigenfunctions", tmp_path)
     assert all(e == 2 for e in r["euler_characteristic"])
+    # the first non-constant eigenfunction of this genus-0 blob: one minimum, one maximum
+    assert r["critical_counts"][0] == (1, 1, 0)
+    # cancelling low-persistence pairs only removes points, and keeps m - s + M
+    for (m, M, s), (m0, M0, s0) in zip(r["critical_counts"], r["raw_critical_counts"]):
+        assert m <= m0 and M <= M0 and s <= s0 and m0 - s0 + M0 == 2
     assert 0 < r["eigenvalues"][0] and np.all(np.diff(r["eigenvalues"]) > 0)
     # higher eigenfunctions oscillate more: more critical points
     totals = [sum(c) for c in r["critical_counts"]]
     assert totals[-1] > totals[0]
+
+
+def test_persistent_critical_points_cancel_a_spurious_pair():
+    """z on a sphere plus a dent: the dent is a minimum and a saddle of tiny persistence."""
+    from data_generators import icosphere
+
+    load("fig02_harmonic")  # puts examples/ on the path
+    import _common as C
+
+    V, F = icosphere(3)
+    f = V[:, 2].copy()
+    k = int(np.argmin(np.abs(V[:, 2]) + np.abs(V[:, 0] - 1.0)))  # a vertex on the equator
+    nbrs = np.unique(F[np.any(F == k, axis=1)])
+    f[k] = f[nbrs[nbrs != k]].min() - 1e-3  # below all its neighbours: a local minimum
+    cp = C.persistent_critical_points(V, F, f, fraction=0.02)
+    m0, M0, s0 = cp["raw"]
+    assert m0 == 2 and M0 == 1 and s0 == 1  # the dent adds a minimum and a saddle
+    assert (cp["n_minima"], cp["n_maxima"], cp["n_saddles"]) == (1, 1, 0)
+    assert cp["minimum"].tolist() == [int(np.argmin(V[:, 2]))]  # the south pole remains
+    # with no threshold nothing is cancelled
+    cp0 = C.persistent_critical_points(V, F, f, fraction=0.0)
+    assert (cp0["n_minima"], cp0["n_maxima"], cp0["n_saddles"]) == (2, 1, 1)
 
 
 def test_fig04_anisotropic_heat(tmp_path):
@@ -86,8 +114,22 @@ def test_fig04_anisotropic_heat(tmp_path):
 def test_fig05_lcurve(tmp_path):
     r = run("fig05_lcurve", tmp_path)
     assert r["error_smoothed"] < 0.5 * r["error_noisy"]
-    # the L-curve corner is (nearly) the best time on the curve
+    # the risk minimum is (nearly) the best time on the curve
     assert r["error_smoothed"] <= 1.25 * r["error_best_on_curve"]
+
+
+def test_fig25_constrained_smoothing(tmp_path):
+    r = run("fig25_constrained_smoothing", tmp_path)
+    assert r["constraint_error"] == 0.0  # the constrained values are kept exactly
+    assert r["constraints"] >= 4 and r["critical_after"] < r["critical_before"] / 2
+    assert r["linf_error_input"] < 0.15 and r["linf_error_clean"] < 0.15
+
+
+def test_fig26_truncated_smoothing(tmp_path):
+    r = run("fig26_truncated_smoothing", tmp_path)
+    assert r["linf_rational"] < r["linf_noisy"] and r["l2_rational"] < r["l2_noisy"]
+    # the truncated result approaches the spectrum-free one as k grows
+    assert r["diff_to_rational_k400"] < r["diff_to_rational_k100"] < r["diff_to_rational_k20"]
 
 
 def test_fig06_conditioning(tmp_path):
@@ -159,3 +201,11 @@ def test_fig24_26_smoothing(tmp_path):
     r = run("fig24_26_smoothing", tmp_path)
     assert r["critical_after"] < 0.5 * r["critical_before"]
     assert r["error_smoothed"] < r["error_noisy"]
+
+
+def test_fig_mcf(tmp_path):
+    r = run("fig_mcf", tmp_path)
+    # the conformalized flow rounds the blob, keeps its area and every triangle
+    assert np.all(np.diff(r["roundness"]) < 0) and r["roundness"][-1] < 0.5 * r["roundness"][0]
+    assert r["area_change"] < 1e-12
+    assert r["min_area_ratio_conformal"] > 1e-3

@@ -72,3 +72,14 @@ def test_invalid_parameters():
         filters.multiscale(1.0, 1, 0.0)
     with pytest.raises(TypeError):
         filters.Filter(3.0)
+
+
+def test_mexican_hat_survey_form():
+    s = np.array([0.0, 0.5, 1.0, 4.0, 30.0])
+    f = filters.mexican_hat(0.2, form="survey")
+    u = 0.2 * s
+    assert np.allclose(f(s), np.sqrt(u) * np.exp(-u ** 2), rtol=1e-14, atol=0)
+    assert np.allclose(f.square(s), f(s) ** 2, rtol=1e-12, atol=1e-300)
+    assert np.allclose(filters.mexican_hat(0.2)(s), u * np.exp(-u), rtol=1e-14, atol=0)
+    with pytest.raises(ValueError, match="form"):
+        filters.mexican_hat(0.2, form="ricker")

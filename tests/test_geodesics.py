@@ -106,3 +106,44 @@ def test_validation():
         HeatGeodesics((V, F), t=-1.0)
     with pytest.raises(TypeError):
         geodesic_distance(V, 0)
+
+
+@pytest.mark.parametrize("name", ["cow.obj", "spot.obj"])
+def test_varadhan_finite_and_in_its_band_on_real_shapes(name):
+    from spectral_igl.applications import varadhan_distance
+
+    V, F = read_shared_mesh(name)
+    V = V / np.sqrt(igl.doublearea(V, F).sum() / 2.0)
+    h = mean_edge_length(V, F)
+    s = int(np.argmin(np.linalg.norm(V - V.mean(0), axis=1)))
+    d = varadhan_distance((V, F), s)
+    assert np.all(np.isfinite(d)) and d[s] < h
+    exact = igl.exact_geodesic(V, F, np.array([s]), VT=np.arange(len(V)))
+    # the documented band: median error within a few % for d in [5h, 10h), low beyond
+    sel = (exact >= 5 * h) & (exact < 10 * h)
+    assert abs(np.median(d[sel] / exact[sel] - 1)) < 0.05
+    far = exact >= 20 * h
+    assert np.all(d[far] > 0.5 * exact[far])
+
+
+def test_varadhan_sphere_tets_and_components():
+    from spectral_igl.applications import varadhan_distance
+
+    V, F = icosphere(4)
+    h = mean_edge_length(V, F)
+    d = varadhan_distance((V, F), 0)
+    exact = great_circle(V, 0)
+    assert np.all(np.isfinite(d))
+    sel = (exact >= 5 * h) & (exact < 10 * h)
+    assert np.max(np.abs(d[sel] / exact[sel] - 1)) < 0.06
+    # a tiny t forces the step count down until nothing underflows; still finite
+    assert np.all(np.isfinite(varadhan_distance((V, F), 0, t=0.05 * h * h)))
+    Vt, T = box_tets((8, 6, 4))
+    dt = varadhan_distance((Vt, T), 0)
+    assert np.all(np.isfinite(dt))
+    # two components: inf on the one without the source
+    V2 = np.r_[V, V + [3.0, 0, 0]]
+    F2 = np.r_[F, F + len(V)]
+    d2 = varadhan_distance((V2, F2), 0)
+    assert np.all(np.isfinite(d2[:len(V)])) and np.all(np.isinf(d2[len(V):]))
+    assert np.allclose(d2[:len(V)], d, rtol=1e-10)

@@ -4,6 +4,7 @@ import pytest
 import scipy.sparse.linalg as spla
 
 import spectral_igl as sig
+from conftest import read_shared_mesh
 from data_generators import icosphere, sample_points, sphere_eigenvalues, sphere_points
 
 EXACT16 = sphere_eigenvalues(17)[1:]  # 2 (x3), 6 (x5), 12 (x7), 20
@@ -26,7 +27,7 @@ def clouds():
     return {"uniform": sphere_points(10000, seed=3), "nonuniform": sphere_points(10000, seed=4, nonuniform=1.0)}
 
 
-@pytest.mark.parametrize("method", ["belkin", "liu"])
+@pytest.mark.parametrize("method", ["delaunay", "belkin", "liu"])
 @pytest.mark.parametrize("sampling", ["uniform", "nonuniform"])
 def test_sphere_first_16_eigenvalues_within_5_percent(clouds, method, sampling):
     P = clouds[sampling]
@@ -41,7 +42,7 @@ def test_sphere_first_16_eigenvalues_within_5_percent(clouds, method, sampling):
     assert lap.area() == pytest.approx(4 * np.pi, rel=0.05)
 
 
-@pytest.mark.parametrize("method", ["belkin", "liu"])
+@pytest.mark.parametrize("method", ["delaunay", "belkin", "liu"])
 def test_matrix_properties(method):
     P = sample_points(*icosphere(3), 1500, seed=1)
     lap = sig.point_cloud_laplacian(P, k=20, method=method)
@@ -67,16 +68,132 @@ def test_liu_masses_are_tangent_voronoi_areas_on_a_grid():
 
 def test_fixed_bandwidth_and_radius_neighbourhoods():
     P = sphere_points(3000, seed=2)
-    lap_t = sig.point_cloud_laplacian(P, k=60, t=0.004)
+    lap_t = sig.point_cloud_laplacian(P, k=60, t=0.004, method="belkin")
     assert np.all(lap_t.data["t"] == 0.004)
     lap_r = sig.point_cloud_laplacian(P, radius=0.3, method="belkin")
     ev, _ = sig.eigs(lap_r, 4)
     assert np.allclose(ev[1:4], 2.0, rtol=0.08)  # coarse (3,000 points), the l=1 triple
     with pytest.raises(ValueError, match="radius"):
-        sig.point_cloud_laplacian(P, radius=1e-4)
+        sig.point_cloud_laplacian(P, radius=1e-4, method="belkin")
+    with pytest.raises(ValueError, match="no bandwidth"):
+        sig.point_cloud_laplacian(P, t=0.004)
 
 
 def test_separated_clusters_are_components():
     P = sphere_points(600, seed=5)
     lap = sig.point_cloud_laplacian(np.vstack([P, P + 10.0]), k=15)
     assert lap.n_components == 2
+
+
+# ---- the default (tangent Delaunay) against robust_laplacian, on four samplings ----------
+
+def fibonacci(n):
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = np.pi * (1 + 5 ** 0.5) * i
+    r = np.sqrt(1 - z * z)
+    return np.c_[r * np.cos(phi), r * np.sin(phi), z]
+
+
+def jittered(n, seed=0):
+    P = fibonacci(n) + 0.3 * np.sqrt(4 * np.pi / n) * np.random.default_rng(seed).standard_normal((n, 3))
+    return P / np.linalg.norm(P, axis=1, keepdims=True)
+
+
+SAMPLINGS = {"fibonacci": fibonacci, "random": lambda n: sphere_points(n, seed=11),
+             "density_x3": lambda n: sphere_points(n, seed=12, nonuniform=1.0),
+             "jittered": jittered}
+
+
+def _err(L, M):
+    ev = np.sort(spla.eigsh(L.tocsc(), 17, M.tocsc(), sigma=-1e-4)[0])
+    return _rel_err(ev)
+
+
+@pytest.mark.parametrize("sampling", list(SAMPLINGS))
+def test_default_converges_on_every_sampling_at_or_below_robust_laplacian(sampling):
+    robust_laplacian = pytest.importorskip("robust_laplacian")
+    errs, refs = [], []
+    for n in (2000, 8000):
+        P = SAMPLINGS[sampling](n)
+        lap = sig.point_cloud_laplacian(P)
+        errs.append(_err(lap.L, lap.B))
+        L, M = robust_laplacian.point_cloud_laplacian(P)
+        refs.append(_err(L, M))
+        # as sparse as robust_laplacian: about 6 neighbours per row
+        assert lap.L.nnz <= 1.05 * L.nnz, (lap.L.nnz, L.nnz)
+    print(f"\n{sampling}: delaunay {errs}, robust_laplacian {refs}")
+    assert errs[1] < 0.6 * errs[0], errs          # shrinks under refinement (4x points)
+    assert errs[0] <= refs[0] and errs[1] <= refs[1], (errs, refs)
+    assert errs[1] < 0.015
+
+
+def test_belkin_bias_on_fibonacci_is_the_missing_self_weight():
+    # with t = (0.9 h)², the hole of a lattice-like sampling around p_i is one point's
+    # worth of the kernel sum, 1/(4π 0.81) ≈ 9.8 %: belkin's eigenvalues are high by
+    # about that much at every resolution, while the default converges
+    errs = []
+    for n in (2000, 8000):
+        lap = sig.point_cloud_laplacian(fibonacci(n), method="belkin")
+        ev, _ = sig.eigs(lap, 17)
+        errs.append(np.median(ev[1:17] / EXACT16 - 1))
+    assert all(0.07 < e < 0.11 for e in errs), errs
+
+
+def test_delaunay_weights_on_a_planar_grid_are_the_grid_cotan_weights():
+    # square grid of spacing h: every interior Voronoi cell is the h × h square and the
+    # four axis neighbours have weight 1 (dual h over primal h); the mass is h²
+    h = 0.1
+    x, y = np.meshgrid(np.arange(12) * h, np.arange(12) * h, indexing="ij")
+    rng = np.random.default_rng(0)
+    P = np.c_[x.ravel(), y.ravel(), np.zeros(144)] + 1e-9 * rng.standard_normal((144, 3))
+    lap = sig.point_cloud_laplacian(P, k=12)
+    inner = np.flatnonzero(((x > 1.5 * h) & (x < 9.5 * h) & (y > 1.5 * h) & (y < 9.5 * h)).ravel())
+    assert np.allclose(lap.B.diagonal()[inner], h * h, rtol=1e-6)
+    D = lap.L[inner].toarray()
+    assert np.allclose(D[np.arange(len(inner)), inner], 4.0, rtol=1e-5)
+    off = D.copy()
+    off[np.arange(len(inner)), inner] = 0
+    assert np.allclose(np.sort(off, axis=1)[:, :4], -1.0, rtol=1e-5)
+    assert np.allclose(np.sort(off, axis=1)[:, 4:], 0.0, atol=1e-4)
+
+
+def test_delaunay_neumann_rectangle_spectrum():
+    # random points on the flat rectangle [0, 2] x [0, 1]: free (Neumann) boundary,
+    # eigenvalues π²(i²/4 + j²)
+    rng = np.random.default_rng(5)
+    P = np.c_[rng.random((6000, 2)) * [2.0, 1.0], np.zeros(6000)]
+    lap = sig.point_cloud_laplacian(P, boundary=True)
+    assert lap.area() == pytest.approx(2.0, rel=0.02)
+    ev, _ = sig.eigs(lap, 9)
+    i, j = np.meshgrid(np.arange(6), np.arange(4), indexing="ij")
+    exact = np.sort((np.pi ** 2 * (i ** 2 / 4.0 + j ** 2)).ravel())[:9]
+    assert ev[0] == 0
+    assert np.max(np.abs(ev[1:] - exact[1:]) / exact[1:]) < 0.03, (ev, exact)
+
+
+
+
+@pytest.mark.parametrize("name", ["spot.obj", "fertility.off", "homer.obj", "fandisk.obj"])
+def test_vertices_of_real_shapes_against_their_mesh_spectrum(name):
+    import warnings
+
+    robust_laplacian = pytest.importorskip("robust_laplacian")
+    V, F = read_shared_mesh(name)
+    used = np.unique(F)
+    V, F = V[used], np.searchsorted(used, F)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        V = V / np.sqrt(sig.laplacian(V, F).area())
+    mesh = sig.laplacian(V, F)
+
+    def first20(L, M):
+        return np.sort(spla.eigsh(L.tocsc(), 21, M.tocsc(), sigma=-1e-4)[0])[1:]
+
+    ref = first20(mesh.L, mesh.B)
+    lap = sig.point_cloud_laplacian(V)
+    ours = np.median(np.abs(first20(lap.L, lap.B) / ref - 1))
+    L, M = robust_laplacian.point_cloud_laplacian(V)
+    theirs = np.median(np.abs(first20(L, M) / ref - 1))
+    print(f"\n{name}: delaunay {ours:.4f}, robust_laplacian {theirs:.4f}")
+    assert ours <= theirs and ours < 0.05, (ours, theirs)

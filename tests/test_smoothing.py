@@ -164,3 +164,58 @@ def test_optimal_time_full_mass_and_curve():
     assert np.all(np.isnan(curve_l["risk"]))
     with pytest.raises(ValueError, match="rule"):
         sig.optimal_time(lap, _sphere_signal(V, 2), rule="gcv")
+
+
+def test_heat_family_against_dense_over_all_times():
+    from spectral_igl.applications import HeatFamily
+
+    V, F = icosphere(3)
+    for mass in ("full", "lumped"):
+        lap = sig.laplacian(V, F, mass=mass)
+        lam, X = sig.dense_eigs(lap)
+        rng = np.random.default_rng(0)
+        Y = np.c_[V[:, 0] + 0.1 * rng.standard_normal(lap.n), rng.choice([-1.0, 1.0], (lap.n, 3))]
+        fam = HeatFamily(lap, Y)
+        assert fam.lambda_max == pytest.approx(lam[-1], rel=0.02)
+        assert fam.lambda_2 == pytest.approx(lam[1], rel=0.02)
+        C = X.T @ (lap.B @ Y)
+        for t in np.logspace(np.log10(0.01 / lam[-1]), np.log10(1 / lam[1]), 9):
+            exact = X @ (np.exp(-t * lam)[:, None] * C)
+            got = np.stack([fam.apply_column(j, [t])[:, 0] for j in range(Y.shape[1])], axis=1)
+            err = np.sqrt(np.einsum("ij,ij->j", got - exact, lap.B @ (got - exact)))
+            assert np.all(err <= 1e-6 * np.sqrt(np.einsum("ij,ij->j", Y, lap.B @ Y))), (mass, t)
+
+
+@pytest.mark.parametrize("name", ["spot.obj", "fandisk.obj"])
+@pytest.mark.parametrize("kind", ["iid", "normal"])
+def test_optimal_shape_time_on_noisy_real_shapes(name, kind):
+    from conftest import read_shared_mesh
+
+    from data_generators.perturb import normal_noise
+    from spectral_igl.applications import diffusion_smooth, optimal_shape_time
+
+    V, F = read_shared_mesh(name)
+    V = V / np.sqrt(np.sum(sig.laplacian(V, F).mass))
+    h = float(np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)))
+    rng = np.random.default_rng(1)
+    Vn = V + 0.3 * h * rng.standard_normal(V.shape) if kind == "iid" else normal_noise(V, F, 0.3 * h, seed=1)
+    lap = sig.laplacian(Vn, F)
+    t, sigma = optimal_shape_time(lap)
+    assert sigma == pytest.approx(0.3 * h, rel=0.15)  # the normal noise added
+    err = lambda u: float(np.sqrt(np.sum((u - V) * (lap.B @ (u - V)))))  # noqa: E731
+    e = [err(diffusion_smooth(lap, Vn, s)) for s in (t / 10, t, 10 * t, h * h)]
+    assert e[1] < e[0] and e[1] < e[2] and e[1] < err(Vn)
+    assert e[1] < e[3]  # better than the former default t = h^2
+
+
+@pytest.mark.parametrize("name", ["cow.obj", "fandisk.obj"])
+def test_optimal_time_on_noisy_functions_on_real_shapes(name):
+    from conftest import read_shared_mesh
+
+    V, F = read_shared_mesh(name)
+    V = V / np.sqrt(np.sum(sig.laplacian(V, F).mass))
+    lap = sig.laplacian(V, F)
+    c = V - V.mean(0)
+    for clean in (np.sin(4 * c[:, 0]) + 3 * np.cos(3 * c[:, 1]) * c[:, 2], c[:, 0] + 0.5 * c[:, 1] * c[:, 2]):
+        for noise in (0.1, 1.0):
+            _decade_check(lap, clean, noise, seed=2)

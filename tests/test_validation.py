@@ -28,7 +28,8 @@ def constructors():
         "laplacian": lambda V, F: sig.laplacian(V, F),
         "laplacian_tet": lambda V, F: sig.laplacian(VT0 if V is V0 else V, T0 if F is F0 else F),
         "anisotropic": lambda V, F: sig.anisotropic_laplacian(V, F, 1.0),
-        "points_belkin": lambda V, F: sig.point_cloud_laplacian(V, k=8),
+        "points_delaunay": lambda V, F: sig.point_cloud_laplacian(V, k=8),
+        "points_belkin": lambda V, F: sig.point_cloud_laplacian(V, k=8, method="belkin"),
         "points_liu": lambda V, F: sig.point_cloud_laplacian(V, k=8, method="liu"),
         "tetrahedralize": lambda V, F: sig.tetrahedralize(V, F),
         "graph": lambda V, F: sig.graph_laplacian(42, F),
@@ -79,7 +80,7 @@ def test_degenerate_but_valid_input_is_handled():
         lap = sig.anisotropic_laplacian(V, F, 2.0)
     assert lap.n == len(V) and lap.n_components == 2 and np.all(np.isfinite(lap.L.data))
     P = np.vstack([V0, V0[:5]])  # coincident points
-    for m in ("belkin", "liu"):
+    for m in ("delaunay", "belkin", "liu"):
         lap = sig.point_cloud_laplacian(P, k=8, method=m)
         assert np.all(np.isfinite(lap.L.data)) and np.all(lap.B.diagonal() > 0)
     with pytest.raises(ValueError, match="coincide"):

@@ -1,19 +1,21 @@
 """Applications built on the engine: harmonic functions and critical points, smoothing,
-time-scale selection, geodesic and transport distances, basis functions, waves."""
+time-scale selection, geodesic and transport distances, basis functions, waves,
+mean-curvature flow."""
 from .basis import diffusion_basis, feature_points, graph_extrema
 from .critical_points import CriticalPoints, critical_points
 from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
 from .harmonic import harmonic
-from .scale import optimal_time
+from .mcf import mean_curvature_flow
+from .scale import HeatFamily, optimal_shape_time, optimal_time, shape_noise
 from .smoothing import diffusion_smooth, smooth, smooth_constrained
-from .transport import sinkhorn, wasserstein_distance
+from .transport import sinkhorn, wasserstein_barycenter, wasserstein_distance
 from .waves import schrodinger
 
 __all__ = [
     "CriticalPoints", "critical_points", "harmonic",
-    "smooth", "smooth_constrained", "diffusion_smooth", "optimal_time",
+    "smooth", "smooth_constrained", "diffusion_smooth", "optimal_time", "optimal_shape_time", "shape_noise", "HeatFamily",
     "HeatGeodesics", "geodesic_distance", "varadhan_distance",
-    "sinkhorn", "wasserstein_distance",
+    "sinkhorn", "wasserstein_distance", "wasserstein_barycenter",
     "diffusion_basis", "feature_points", "graph_extrema",
-    "schrodinger",
+    "schrodinger", "mean_curvature_flow",
 ]

@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.csgraph as csgraph
 
-from .._validate import as_cells, as_points, as_signal
+from .._validate import as_cells, as_mesh_arrays, as_points, as_signal, is_mesh_object
 
 __all__ = ["CriticalPoints", "critical_points"]
 
@@ -113,13 +113,15 @@ def _link_structure(F: np.ndarray, n: int):
     return v, a, b, node_v, node_u, n_nodes, is_cycle, is_path
 
 
-def critical_points(V, F, f) -> CriticalPoints:
+def critical_points(V, F, f=None) -> CriticalPoints:
     r"""Minima, maxima and saddles of the piecewise-linear function ``f`` on ``(V, F)``.
 
     Parameters
     ----------
-    V : (n, 3) float
-        Vertex positions (only their number is used: the test is combinatorial).
+    V : (n, 3) float, or a mesh object
+        Vertex positions (only their number is used: the test is combinatorial). A
+        pyvista, trimesh or meshio triangle mesh may stand for ``(V, F)``: then call
+        ``critical_points(mesh, f)``.
     F : (m, 3) int
         Triangles.
     f : (n,) float
@@ -166,6 +168,10 @@ def critical_points(V, F, f) -> CriticalPoints:
     >>> cp.n_minima, cp.n_maxima, cp.n_saddles
     (1, 1, 0)
     """
+    if is_mesh_object(V) and f is None:
+        V, F, f = (*as_mesh_arrays(V), F)
+    if f is None:
+        raise TypeError("critical_points needs (V, F, f) or (mesh, f); f is missing")
     V = as_points(V, "V", dims=(2, 3))
     n = V.shape[0]
     F = as_cells(F, n, "F", sizes=(3,))

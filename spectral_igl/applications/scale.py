@@ -8,10 +8,11 @@ import numpy as np
 from .._validate import as_signal, describe
 from ..approx import apply_filter
 from ..filters import heat
-from ..laplacian import as_laplacian, lambda_max
-from ..linalg import eigs
+from ..laplacian import as_laplacian
+from ..linalg import factorize
+from ..progress import progress_bar
 
-__all__ = ["optimal_time"]
+__all__ = ["optimal_time", "shape_noise", "optimal_shape_time", "HeatFamily"]
 
 
 def _curvature(x, y, s):
@@ -51,8 +52,143 @@ def _noise_variance(ts, res2, T, t_max):
     return float(nnls(A, np.ones(sel.sum()))[0][0])
 
 
+class HeatFamily:
+    r"""Heat filters :math:`e^{-t\tilde L}X` for a whole range of ``t`` from two Krylov bases.
+
+    Lanczos in the B-inner product, one process per column of ``X`` run in lockstep (block
+    solves):
+
+    - a polynomial basis of :math:`\tilde L = B^{-1}L` (``k_poly`` steps, one solve with
+      :math:`B` each), accurate for :math:`t\lambda_{\max} \lesssim` ``k_poly`` / 3;
+    - a shift-and-invert basis of :math:`(B + \tau L)^{-1}B` (``k_si`` steps, one
+      factorization), whose error does not grow with :math:`\lambda_{\max}`, for larger t.
+
+    Each :meth:`apply` is then a small dense exponential and a sum of basis vectors: two
+    factorizations and ``k_poly + k_si`` block solves for every ``t``.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    X : (n, c) float
+    tau : float, optional
+        Shift; default from the Ritz values (geometric mean of :math:`1/\lambda_{\max}`
+        and :math:`1/\lambda_2`).
+    k_poly, k_si : int
+        Steps of the two bases.
+
+    Attributes
+    ----------
+    lambda_max, lambda_2 : float
+        Ritz estimates (largest Ritz value of the polynomial basis, smallest non-zero one
+        of the shift-and-invert basis, over all columns); estimates, not bounds.
+    t_split : float
+        Times up to this use the polynomial basis.
+    """
+
+    def __init__(self, lap, X, tau=None, k_poly: int = 24, k_si: int = 48):
+        self.B = lap.B.tocsr()
+        X = np.asarray(X, dtype=float)
+        X = X if X.ndim == 2 else X[:, None]
+        # the kernel of L (component indicators) is invariant: split it off exactly, so the
+        # bases see only non-zero eigenvalues
+        Z = lap.component_basis()
+        self._Z, self._BZ = Z, self.B @ Z
+        self.mean = Z @ (Z.T @ (self.B @ X))
+        self.X = X - self.mean
+        n = lap.n
+        kp = int(min(k_poly, max(n - 1, 1)))
+        ks = int(min(k_si, max(n - 1, 1)))
+        if lap.lumped:
+            mi = 1.0 / lap.mass
+            solve_b = lambda Y: mi[:, None] * Y  # noqa: E731
+        else:
+            fb = factorize(self.B)
+            solve_b = fb.solve
+        L = lap.L.tocsr()
+        self._poly = self._lanczos(lambda Y: solve_b(L @ Y), kp)
+        theta = self._poly[3]
+        self.lambda_max = float(np.max(theta))
+        self.t_split = kp / (3.0 * self.lambda_max)
+        if tau is None:
+            tau = 1.0 / self.lambda_max
+            # a first guess of lambda_2 from the area (Weyl), refined by the Ritz values below
+            tau = np.sqrt(tau * lap.area() / 20.0)
+        self.tau = float(tau)
+        fs = factorize((self.B + self.tau * L).tocsr())
+        self._si = self._lanczos(lambda Y: fs.solve(self.B @ Y), ks)
+        mu = self._si[3]
+        lam = (1.0 / np.clip(mu, 1e-300, None) - 1.0) / self.tau
+        nz = lam[lam > 1e-8 * self.lambda_max]
+        self.lambda_2 = float(np.min(nz)) if nz.size else self.lambda_max
+
+    def _lanczos(self, op, k):
+        B, X = self.B, self.X
+        n, c = X.shape
+        # layout (column, step, vertex): every column's basis is contiguous
+        Q = np.zeros((c, k + 1, n))
+        BQ = np.zeros((c, k + 1, n))
+        BX = B @ X
+        beta0 = np.sqrt(np.maximum(np.einsum("ij,ij->j", X, BX), 0.0))
+        ok = beta0 > 0
+        safe = np.where(ok, beta0, 1.0)
+        Q[:, 0], BQ[:, 0] = (X / safe).T, (BX / safe).T
+        alpha = np.zeros((c, k))
+        beta = np.zeros((c, k))
+        size = np.full(c, k)
+        for j in range(k):
+            W = np.ascontiguousarray(op(np.ascontiguousarray(Q[:, j].T)).T)  # (c, n)
+            # three-term recurrence, each term orthogonalised twice; no full
+            # re-orthogonalisation (Lanczos approximations of f(A)v stay accurate when the
+            # basis loses orthogonality, Druskin-Greenbaum-Knizhnerman 1998)
+            lo = max(j - 1, 0)
+            for _ in range(2):
+                h = np.einsum("cin,cn->ci", BQ[:, lo:j + 1], W)
+                W -= np.einsum("ci,cin->cn", h, Q[:, lo:j + 1])
+                alpha[:, j] += h[:, -1]
+            # keep the kernel out (round-off brings it back, and the shift-and-invert
+            # operator amplifies it most)
+            W -= (self._Z @ (self._BZ.T @ W.T)).T
+            BW = np.ascontiguousarray((B @ W.T).T)
+            b = np.sqrt(np.maximum(np.einsum("ij,ij->i", W, BW), 0.0))
+            scale = np.maximum(np.abs(alpha[:, : j + 1]).max(axis=1), 1e-300)
+            done = (b <= 1e-10 * scale) & (size == k)
+            size[done] = j + 1
+            b = np.where(size <= j + 1, 0.0, b)
+            beta[:, j] = b
+            sb = np.where(b > 0, b, 1.0)[:, None]
+            Q[:, j + 1], BQ[:, j + 1] = W / sb, BW / sb
+        eig = []
+        for col in range(c):
+            m = int(size[col])
+            T = np.diag(alpha[col, :m]) + np.diag(beta[col, :m - 1], 1) + np.diag(beta[col, :m - 1], -1)
+            th, U = np.linalg.eigh(T)
+            eig.append((m, th, U))
+        return Q, beta0 * ok, eig, np.concatenate([e[1] for e in eig])
+
+    def apply_column(self, col: int, ts) -> np.ndarray:
+        r"""(n, len(ts)) approximations of :math:`e^{-t\tilde L}X_{:, col}`, one column per t."""
+        ts = np.atleast_1d(np.asarray(ts, dtype=float))
+        out = np.empty((self.X.shape[0], ts.size))
+        for poly, basis in ((True, self._poly), (False, self._si)):
+            sel = ts <= self.t_split if poly else ts > self.t_split
+            if not sel.any():
+                continue
+            Q, beta0, eig, _ = basis
+            m, th, U = eig[col]
+            lam = th if poly else (1.0 / np.clip(th, 1e-300, None) - 1.0) / self.tau
+            G = np.exp(-np.outer(np.maximum(lam, 0.0), ts[sel]))          # (m, T)
+            coef = U @ (G * U[0][:, None]) * beta0[col]
+            out[:, sel] = Q[col, :m].T @ coef
+        return out + self.mean[:, col][:, None]
+
+    def apply(self, t: float) -> np.ndarray:
+        r"""(n, c) approximation of :math:`e^{-t\tilde L}X`."""
+        return np.stack([self.apply_column(j, [t])[:, 0] for j in range(self.X.shape[1])], axis=1)
+
+
 def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes: int = 16,
-                 seed: int = 0, method: str = "auto", tol: float = 1e-8):
+                 seed: int = 0, method: str = "auto", tol: float = 1e-8, noise=None,
+                 progress=None):
     r"""Diffusion time that best separates a smooth signal from white noise.
 
     For :math:`F(t) = S_t f = e^{-t\tilde L} f` the residual
@@ -77,6 +213,9 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     lap : Laplacian
     f : (n,) float
         Noisy function.
+    noise : float, optional
+        Per-vertex standard deviation :math:`\sigma` of the noise when known (``"risk"``);
+        default: fitted.
     ts : (k,) float, optional
         Times to try, increasing. Default: ``n_times`` log-spaced values in
         :math:`[0.01/\lambda_{\max}, 1/\lambda_2]` for ``"risk"`` (which needs the
@@ -91,8 +230,13 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     seed : int
         Seed of the probes.
     method, tol
-        Passed to :func:`spectral_igl.apply_filter` for each time; ``"auto"`` is
-        ``"chebyshev"`` here, the cheapest for a block of ``1 + probes`` columns.
+        ``"auto"``: every time from one :class:`HeatFamily` (two Krylov bases of the
+        ``1 + probes`` columns; two factorizations and about 70 block solves in all,
+        whatever the number of times). Any other value: one call of
+        :func:`spectral_igl.apply_filter` per time with this method and ``tol``.
+    progress : bool, optional
+        A progress bar on stderr (see :mod:`spectral_igl.progress`; default off): one step
+        per candidate time with an explicit ``method``, one per column with ``"auto"``.
 
     Returns
     -------
@@ -112,13 +256,19 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     corner sits at :math:`1/\lambda_2`). Measured with the criterion "smaller error to
     the clean signal than at t/10 and at 10 t" (``benchmarks/optimal_time.py --quick``:
     icosphere(3) and a 9x9x9 tet box, full and lumped mass, signals of degree 1 to 8 and
-    a bump, noise 3% to 100%), ``"risk"`` meets it in 59 of 72 cases, ``"lcurve"`` in 29.
-    All 13 misses of ``"risk"`` are signals of degree >= 5 with 3% or 10% noise, whose
-    best time is below :math:`1/\lambda_{\max}`: there the signal is about as rough as
-    the mesh, hardly separable from the noise, and the gain of any smoothing is small.
-    Cost: one heat evaluation of ``1 + probes`` columns per time.
-        """
+    a bump, noise 3% to 100%), ``"risk"`` meets it in 58 of 72 cases, ``"lcurve"`` in 29.
+    All 14 misses of ``"risk"`` have 3% or 10% noise (signals of degree >= 5 and cos5, or
+    the bump and cos3 at 3%), whose best time is near or below :math:`1/\lambda_{\max}`:
+    there the signal is about as rough as the mesh, hardly separable from the noise, and
+    the gain of any smoothing is small.
+    On unit-area real meshes (``benchmarks/optimal_time.py --real``: cow, fandisk, spot,
+    rocker-arm; two smooth functions plus 10%, 30%, 100% noise) it meets it in 24 of 24
+    cases. For a noisy shape's own coordinates use :func:`optimal_shape_time`.
 
+    Cost (``method="auto"``): two factorizations and 72 block solves of ``1 + probes``
+    columns for all the times together; 0.7-1.0 s CPU = 16-24 cholespy factorizations
+    of :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``, three runs).
+    """
     lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
@@ -127,38 +277,48 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         raise ValueError(f"rule must be 'risk' or 'lcurve', got {rule!r}")
     if isinstance(probes, bool) or not isinstance(probes, numbers.Integral) or probes < 1:
         raise ValueError(f"probes must be a positive integer, got {describe(probes)}")
-    lmax = float(lambda_max(lap))
+    k = int(probes) if rule == "risk" else 0
+    P = np.random.default_rng(seed).choice([-1.0, 1.0], size=(lap.n, k))
+    X = np.c_[f, P]
+    fam = HeatFamily(lap, X)
+    lmax = fam.lambda_max
     if ts is None:
-        lam = np.asarray(eigs(lap, lap.n_components + 1)[0])
         lo = (0.01 if rule == "risk" else 1.0) / lmax
-        hi = 1.0 / float(lam[lap.n_components])
+        hi = 1.0 / fam.lambda_2
         ts = np.logspace(np.log10(lo), np.log10(max(hi, 1000 * lo)), int(n_times))
     ts = np.asarray(ts, dtype=float)
     if ts.ndim != 1 or ts.size < 7 or np.any(ts <= 0) or np.any(np.diff(ts) <= 0):
         raise ValueError(f"ts must be at least 7 increasing positive times, got {ts.size} values")
     m = lap.mass
-    Z = lap.component_basis()
-    mean = Z @ (Z.T @ (lap.B @ f))
-    k = int(probes) if rule == "risk" else 0
-    P = np.random.default_rng(seed).choice([-1.0, 1.0], size=(lap.n, k))
-    X = np.c_[f, P]
+    mean = fam.mean[:, 0]
     n_t = ts.size
     if method == "auto":
-        method = "chebyshev"
-    R, ED, EN, RM2, TMS, TRES = (np.empty(n_t) for _ in range(6))
-    for i, t in enumerate(ts):
-        Y = np.real(apply_filter(lap, heat(t), X, method=method, tol=tol))
-        F = Y[:, 0]
-        d = F - f
-        R[i] = np.sqrt(max(d @ (lap.B @ d), 0.0))
-        ED[i] = np.sqrt(max(F @ (lap.L @ F), 0.0))
-        g = F - mean
-        EN[i] = np.sqrt(max(g @ (lap.B @ g), 0.0))
-        RM2[i] = float(m @ d ** 2)
-        if k:
-            S = Y[:, 1:]
-            TMS[i] = float(np.mean(np.einsum("ij,ij->j", P, m[:, None] * S)))
-            TRES[i] = float(np.mean(m @ (P - S) ** 2))
+        Fs = fam.apply_column(0, ts)                                    # (n, n_t)
+        bar = progress_bar(1 + k, "optimal time", progress, unit="column")
+    else:
+        bar = progress_bar(n_t, "optimal time", progress, unit="time")
+        Ys = []
+        for t in ts:
+            Ys.append(np.real(apply_filter(lap, heat(t), X, method=method, tol=tol)))
+            bar.update()
+        Fs = np.stack([Y[:, 0] for Y in Ys], axis=1)
+    D = Fs - f[:, None]
+    R = np.sqrt(np.maximum(np.einsum("ij,ij->j", D, lap.B @ D), 0.0))
+    ED = np.sqrt(np.maximum(np.einsum("ij,ij->j", Fs, lap.L @ Fs), 0.0))
+    G = Fs - mean[:, None]
+    EN = np.sqrt(np.maximum(np.einsum("ij,ij->j", G, lap.B @ G), 0.0))
+    RM2 = m @ D ** 2
+    TMS, TRES = np.zeros(n_t), np.zeros(n_t)
+    if method == "auto":
+        bar.update()
+    for j in range(k):
+        S = fam.apply_column(j + 1, ts) if method == "auto" else np.stack([Y[:, j + 1] for Y in Ys], axis=1)
+        p = P[:, j]
+        TMS += (p * m) @ S / k
+        TRES += m @ (p[:, None] - S) ** 2 / k
+        if method == "auto":
+            bar.update()
+    bar.close()
     tiny = np.finfo(float).tiny
     x, s = np.log(np.maximum(R, tiny)), np.log(ts)
     # the Dirichlet curve turns counter-clockwise at its corner, the norm curve clockwise
@@ -169,7 +329,7 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     risk = np.full(n_t, np.nan)
     sigma2 = np.nan
     if rule == "risk":
-        sigma2 = _noise_variance(ts, RM2, TRES, 2.0 / lmax)
+        sigma2 = _noise_variance(ts, RM2, TRES, 2.0 / lmax) if noise is None else float(noise) ** 2
         risk = RM2 - sigma2 * m.sum() + 2.0 * sigma2 * TMS
         i = int(np.argmin(risk))
     else:
@@ -177,3 +337,91 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     curve = {"t": ts, "residual": R, "energy": ED if found else EN, "curvature": curv,
              "risk": risk, "noise": np.sqrt(sigma2)}
     return float(ts[i]), curve
+
+
+def shape_noise(V, F) -> float:
+    r"""Robust estimate of the standard deviation of a triangle mesh's noise along its normals.
+
+    The umbrella vector :math:`u_i = v_i - \frac1{|N(i)|}\sum_{j\in N(i)} v_j`, projected on
+    the normal :math:`n_i` of the mesh smoothed by one step
+    :math:`(M + h^2 L)^{-1}M` (so that the normals are not those of the noise), is
+    :math:`\nu_i - \overline{\nu}_{N(i)}` plus a curvature term of order :math:`h^2\kappa`,
+    for normal displacements :math:`\nu` of variance :math:`\sigma^2`; so
+
+    .. math:: \hat\sigma = 1.4826\, \operatorname{MAD}_i(u_i\cdot n_i)
+              \big/ \sqrt{1 + 1/|N(i)|}
+
+    (median absolute deviation: features and curvature affect few vertices). An
+    estimate; on a clean mesh it returns the curvature term's scale, a small fraction of
+    the edge length.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+
+    Returns
+    -------
+    float
+    """
+    import igl
+    import scipy.sparse as sp
+
+    V = np.asarray(V, dtype=float)
+    F = np.asarray(F, dtype=np.int64)
+    if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
+        raise ValueError(f"shape_noise needs a triangle mesh, got V {V.shape} and F {F.shape}")
+    A = igl.adjacency_matrix(F).astype(float)
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    used = deg > 0
+    u = V - (A @ V) / np.maximum(deg, 1.0)[:, None]
+    L = -igl.cotmatrix(V, F)
+    m = np.asarray(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).diagonal(), dtype=float)
+    m[~(m > 0)] = float(m[m > 0].mean())  # unreferenced vertices: keep the system definite
+    M = sp.diags(m)
+    E = igl.edges(F)
+    h = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+    Vs = factorize(sp.csr_matrix(M + h * h * L)).solve(M @ V)
+    N = igl.per_vertex_normals(Vs, F)
+    un = np.einsum("ij,ij->i", u, np.nan_to_num(N))[used]
+    mad = np.median(np.abs(un - np.median(un)))
+    return float(1.4826 * mad / np.sqrt(1.0 + 1.0 / np.median(deg[used])))
+
+
+def optimal_shape_time(lap, **kwargs):
+    r"""Diffusion time for smoothing a noisy triangle mesh's own vertex coordinates.
+
+    The heat flow of the shape's own operator removes noise along the normals only
+    (tangential displacements are nearly linear functions, which it reproduces). So the
+    risk rule of :func:`optimal_time` is applied to each coordinate with the per-coordinate
+    variance of the normal noise, :math:`\hat\sigma^2/3` (:func:`shape_noise`), rather than
+    a variance fitted to the residual (which the noisy operator hides); the median of the
+    three times is returned.
+
+    Measured (``benchmarks/optimal_time.py --real``, cow, fandisk, spot, rocker-arm, unit
+    area, i.i.d. or normal noise of 0.1, 0.3 and 1 mean edge length h): the time beats
+    t/10 and 10 t in 18 of 24 cases. Misses: i.i.d. noise of one edge length (all four
+    shapes; the mesh folds and 10 t is better, 0.61-0.66 of the error) and the coarse
+    cow at 0.1 h (t/10 is better, 0.85-0.96 of the error). Against the former default
+    :math:`t = h^2` it is better at 0.1 h and 0.3 h noise and worse at 1 h.
+
+    Parameters
+    ----------
+    lap : Laplacian
+        Of the noisy triangle mesh (``V`` and ``F`` in ``lap.data``).
+    **kwargs
+        Passed to :func:`optimal_time`.
+
+    Returns
+    -------
+    t : float
+    sigma : float
+        The estimated normal noise (:func:`shape_noise`).
+    """
+    lap = as_laplacian(lap)
+    if lap.domain != "triangle" or "V" not in lap.data or "F" not in lap.data:
+        raise ValueError(f"optimal_shape_time needs a triangle mesh Laplacian, got domain {lap.domain!r}")
+    V, F = np.asarray(lap.data["V"], dtype=float), lap.data["F"]
+    sigma = shape_noise(V, F)
+    ts = [optimal_time(lap, V[:, j], noise=sigma / np.sqrt(3.0), **kwargs)[0] for j in range(V.shape[1])]
+    return float(np.median(ts)), sigma

@@ -48,6 +48,7 @@ from .._validate import as_delta
 from ..approx import spectral_operator
 from ..filters import check_filter
 from ..laplacian import as_laplacian
+from ..progress import progress_bar
 from .probing import probing_diagonal
 from .selinv import NoSelinv, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal
@@ -75,7 +76,8 @@ def _gram_apply(lap, op, delta):
 def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int | None = None,
                     distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
                     max_colours: int | None = None, tol: float = 1e-8,
-                    engine_method: str = "auto", seed: int = 0, return_info: bool = False):
+                    engine_method: str = "auto", seed: int = 0, return_info: bool = False,
+                    progress=None):
     r"""Diagonal of the spectral kernel :math:`G = \varphi(\tilde L)B^{-1}` at every vertex.
 
     .. math:: G_{ii} = \sum_l \varphi(\lambda_l)\, x_l(i)^2
@@ -124,6 +126,9 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         and ``sample_rel_error`` (max over the samples), the ``samples`` and, when
         chosen, the ``predicted_rel_error``; for ``"exact"`` the certified
         ``abs_error_bound`` (max over vertices).
+    progress : bool, optional
+        Draw a progress bar on stderr, one step per pole (``"selinv"``) or block of 64
+        columns or colours; see :mod:`spectral_igl.progress` (default: off).
 
     Returns
     -------
@@ -136,12 +141,13 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     if not isinstance(method, str) or method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     args = (method, delta, k, distance, samples, rtol, max_colours, float(tol), engine_method, seed)
-    diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args))
+    diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args, progress=progress))
     diag = diag.copy()    # the cached array stays as computed whatever the caller does
     return (diag, dict(info)) if return_info else diag
 
 
-def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed):
+def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed,
+              progress=None):
     n = lap.n
     auto = method == "auto"
     if auto:
@@ -165,14 +171,14 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
                              "and a lumped mass for delta='seed'")
         try:
             kern = selinv_kernel(lap, filt, tol)
-            diag, bound = kern.diagonal()
+            diag, bound = kern.diagonal(progress)
         except NoSelinv as exc:
             if not auto:
                 raise ValueError(f"method='selinv' cannot handle {filt.name!r}: {exc}; use 'probing'") from None
             fallback = "dense" if n <= EXACT_MAX else "probing"
             log.info("kernel_diagonal: selinv cannot handle %r (%s); using %r", filt, exc, fallback)
             return _diagonal(lap, filt, fallback, delta, k, distance, samples, rtol, max_colours, tol,
-                             engine_method, seed)
+                             engine_method, seed, progress)
         if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
             diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
         info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)))
@@ -198,6 +204,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         diag = np.empty(n, dtype=dtype)
         bound = np.zeros(n)
         minv = 1.0 / lap.mass
+        bar = progress_bar(-(-n // BLOCK), "kernel diagonal", progress, unit="block")
         for a in range(0, n, BLOCK):
             idx = np.arange(a, min(a + BLOCK, n))
             E = np.zeros((n, idx.size))
@@ -208,11 +215,13 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
             # |e_i^T dY| <= ||B^-1 e_i||_B ||dY||_B, (B^-1)_ii <= 5/m_i for linear FEM masses
             fac = 1.0 if lap.lumped else 5.0
             bound[idx] = eb * np.sqrt(fac * minv[idx]) if delta == "mass" else np.nan
+            bar.update()
+        bar.close()
         info["applications"] = n
         info["abs_error_bound"] = float(np.max(bound)) if np.all(np.isfinite(bound)) else float("nan")
         return diag, info
 
     diag, pinfo = probing_diagonal(lap, filt, G, delta, k, distance, samples, rtol, max_colours, seed,
-                                   dtype, block=BLOCK)
+                                   dtype, block=BLOCK, progress=progress)
     info.update(pinfo)
     return diag, info

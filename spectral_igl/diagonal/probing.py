@@ -5,6 +5,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, shortest_path
 
+from ..progress import progress_bar
 from .spectral import low_rank, phi_values
 
 __all__ = ["distance_colouring", "probing_diagonal", "MAX_COLOURS", "KDEFL"]
@@ -143,7 +144,7 @@ def _choose_probing(lap, filt, delta, C, idx, exact, k, distance, rtol, budget):
 
 
 def probing_diagonal(lap, filt, G, delta: str, k, distance, samples: int, rtol: float, max_colours,
-                     seed: int, dtype, block: int = 64):
+                     seed: int, dtype, block: int = 64, progress=None):
     """Probing estimate of diag(G), ``G(Z)`` applying the kernel to the columns of Z.
 
     Returns ``(diag, info)``; the error is measured at ``samples`` vertices (exact there)."""
@@ -174,6 +175,7 @@ def probing_diagonal(lap, filt, G, delta: str, k, distance, samples: int, rtol: 
     info.update(distance=distance, colours=ncol, k=k)
     diag = np.zeros(n, dtype=dtype)
     rows = np.arange(n)
+    bar = progress_bar(-(-ncol // block), "kernel diagonal", progress, unit="block")
     for a in range(0, ncol, block):
         cols = np.arange(a, min(a + block, ncol))
         sel = (colours >= cols[0]) & (colours <= cols[-1])
@@ -181,6 +183,8 @@ def probing_diagonal(lap, filt, G, delta: str, k, distance, samples: int, rtol: 
         Z[rows[sel], colours[sel] - a] = 1.0
         Y = G(Z)
         diag[sel] = Y[rows[sel], colours[sel] - a]
+        bar.update()
+    bar.close()
     info["applications"] += ncol
     if k > 0:
         lam, W = low_rank(lap, k, delta)

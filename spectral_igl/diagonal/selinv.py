@@ -14,6 +14,7 @@ from ..linalg import (
     mass_solve,
     shifted_factor,
 )
+from ..progress import progress_bar
 
 __all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]
 
@@ -126,16 +127,18 @@ class SelinvKernel:
             out -= self._kernel_part()[:, None] * self.lap.component_sum(E)
         return out
 
-    def diagonal(self):
+    def diagonal(self, progress=None):
         """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
         if self._diag is None:
-            self._diag = self._power_diagonal() if self.power else self._rational_diagonal()
+            self._diag = self._power_diagonal() if self.power else self._rational_diagonal(progress)
         return self._diag
 
-    def _rational_diagonal(self):
+    def _rational_diagonal(self, progress=None):
         diag = np.zeros(self.lap.n)
-        for c, k, fac in self._factors():
-            diag += k * (c * fac.inverse_diagonal()).real
+        with progress_bar(len(self.pf.terms), "kernel diagonal", progress, unit="pole") as bar:
+            for c, k, fac in self._factors():
+                diag += k * (c * fac.inverse_diagonal()).real
+                bar.update()
         diag += self.pf.alpha0.real * self.minv
         if self.filt.singular:
             diag -= self._kernel_part()

@@ -10,9 +10,10 @@ from .cache import Cache
 from .graph import graph_laplacian
 from .mesh import laplacian
 from .points import point_cloud_laplacian
+from .polygon import polygon_laplacian
 from .tetrahedralize import tetrahedralize
 from .voxels import voxel_laplacian
 
 __all__ = ["Laplacian", "Cache", "make_laplacian", "as_laplacian", "laplacian",
            "point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
-           "graph_laplacian", "tetrahedralize", "lambda_max", "mass_ratio"]
+           "graph_laplacian", "tetrahedralize", "lambda_max", "mass_ratio", "polygon_laplacian"]

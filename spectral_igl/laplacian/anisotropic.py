@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_nonnegative, as_points
+from .._validate import as_cells, as_mesh_arrays, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
 from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, star_adjacency
 
@@ -32,7 +32,7 @@ def _scatter(idx, vals, n):
     return np.stack([np.bincount(idx, weights=vals[:, j], minlength=n) for j in range(vals.shape[1])], axis=1)
 
 
-def face_curvature(V, F):
+def face_curvature(V, F=None):
     r"""Principal curvatures and directions per face.
 
     The shape operator of each face is fitted to the change of the (area-weighted) vertex
@@ -42,7 +42,7 @@ def face_curvature(V, F):
 
     Parameters
     ----------
-    V : (n, 3) float
+    V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``F`` omitted
     F : (m, 3) int, without degenerate faces
 
     Returns
@@ -53,6 +53,7 @@ def face_curvature(V, F):
     dirs : (m, 2, 3) float
         Unit principal directions in the face plane, ``dirs[:, a]`` for ``kappa[:, a]``.
     """
+    V, F = as_mesh_arrays(V, F)
     V = np.ascontiguousarray(as_points(V, "V", dims=(3,)), dtype=np.float64)
     F = np.ascontiguousarray(as_cells(F, V.shape[0], "F"), dtype=np.int64)
     if F.shape[1] != 3:
@@ -131,7 +132,7 @@ def _anisotropic_faces_numpy(V, F, alpha):
     return kappa, dirs, K
 
 
-def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Laplacian:
+def anisotropic_laplacian(V, F=None, alpha: float = 10.0, mass: str = "full") -> Laplacian:
     r"""Anisotropic Laplace--Beltrami operator of Andreux, Rodolà, Aubry & Cremers (2014).
 
     Each face carries a diffusion tensor in its principal-curvature frame
@@ -149,8 +150,8 @@ def anisotropic_laplacian(V, F, alpha: float = 10.0, mass: str = "full") -> Lapl
 
     Parameters
     ----------
-    V : (n, 3) float
-    F : (m, 3) int
+    V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``F`` omitted
+    F : (m, 3) int, optional
     alpha : float, >= 0
         Anisotropy strength, in units of length (curvature is 1/length): scale it with
         the shape (``alpha = 10`` on a shape of unit size is strong anisotropy).

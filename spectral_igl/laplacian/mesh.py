@@ -6,12 +6,15 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_points
+from .._validate import as_cells, as_mesh_arrays, as_points
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass", "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness"]
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass",
+           "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness",
+           "mean_value_weights"]
 
-_WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform")
+_WEIGHTS = ("cotan", "intrinsic_delaunay", "uniform", "mean_value")
+_ELEMENTS = ("auto", "triangle", "tet", "polygon")
 MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
@@ -22,8 +25,13 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
-def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
-    """(m,) area of each triangle or volume of each tetrahedron (unsigned)."""
+def element_measures(V, C=None) -> np.ndarray:
+    """(m,) area of each triangle or volume of each tetrahedron (unsigned).
+
+    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    """
+    V, C = as_mesh_arrays(V, C)
+    V, C = np.asarray(V, dtype=float), np.asarray(C)
     if C.shape[1] == 3:
         e1 = V[C[:, 1]] - V[C[:, 0]]
         e2 = V[C[:, 2]] - V[C[:, 0]]
@@ -34,8 +42,10 @@ def element_measures(V: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.abs(np.einsum("ij,ij->i", _cross(e1, e2), e3)) / 6.0
 
 
-def clean_mesh(V, C, rel_tol: float = 1e-12):
+def clean_mesh(V, C=None, rel_tol: float = 1e-12):
     """Validate ``(V, C)`` and drop degenerate elements.
+
+    ``V`` may also be a pyvista/trimesh/meshio mesh, with ``C`` omitted.
 
     An element is degenerate when it repeats a vertex or its measure is at most
     ``rel_tol`` times the largest element measure: its cotangent weights would be
@@ -48,6 +58,7 @@ def clean_mesh(V, C, rel_tol: float = 1e-12):
 
 def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     """:func:`clean_mesh`, also returning the measures of the kept elements."""
+    V, C = as_mesh_arrays(V, C)
     V = as_points(V, "V", dims=(2, 3))
     shape = np.shape(C) if isinstance(C, np.ndarray) else ()
     C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
@@ -91,6 +102,33 @@ def _edge_manifold(F: np.ndarray) -> bool:
     return bool(counts.max() <= 2)
 
 
+def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
+    r"""(n, n) mean-value weights of a triangle mesh (Floater 2003), not symmetric.
+
+    .. math:: w_{ij} = \frac{\tan(\delta_{ij}/2) + \tan(\gamma_{ij}/2)}{\|x_j - x_i\|},
+
+    with :math:`\delta_{ij}, \gamma_{ij}` the angles *at* :math:`x_i` between the edge
+    :math:`ij` and the other edges of the two triangles on it (one on a boundary edge).
+    The weights are positive for every triangle shape, but :math:`w_{ij} \ne w_{ji}`
+    in general: the angles are measured at the row's vertex.
+    """
+    n = V.shape[0]
+    rows, cols, vals = [], [], []
+    for a in range(3):
+        i, j, k = F[:, a], F[:, (a + 1) % 3], F[:, (a + 2) % 3]
+        e1, e2 = V[j] - V[i], V[k] - V[i]
+        l1, l2 = np.linalg.norm(e1, axis=1), np.linalg.norm(e2, axis=1)
+        dot = np.einsum("ij,ij->i", e1, e2)
+        cr = np.linalg.norm(_cross(e1, e2), axis=1) if V.shape[1] == 3 else \
+            np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        half_tan = (l1 * l2 - dot) / cr          # tan(θ/2) = (1 - cos θ) / sin θ
+        rows += [i, i]
+        cols += [j, k]
+        vals += [half_tan / l1, half_tan / l2]
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n, n))
+
+
 def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.csr_matrix:
     """Positive semi-definite stiffness of a clean mesh: the one place libigl's sign flips.
 
@@ -106,6 +144,12 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
         if V.shape[1] != 3:
             V = np.ascontiguousarray(np.c_[V, np.zeros(len(V))])
         return -igl.intrinsic_delaunay_cotmatrix(V, C)[0].tocsr()
+    if weights == "mean_value":
+        if C.shape[1] != 3:
+            raise ValueError("weights='mean_value' is defined for triangle meshes only")
+        W = mean_value_weights(V, C)
+        W = ((W + W.T) * 0.5).tocsr()
+        return (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
     A = mesh_components(V.shape[0], C)
     A.data[:] = 1.0
     return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
@@ -136,21 +180,87 @@ def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None
     return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
 
-def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
-    r"""Linear-FEM Laplacian of a triangle mesh ``(V, F)`` or tetrahedral mesh ``(V, T)``.
+def _element_kind(V, F, elements: str):
+    """``("polygon", faces)`` or ``("cells", F)``: what ``laplacian`` should build from ``F``."""
+    if elements == "polygon":
+        return ("polygon", F)
+    if not isinstance(F, np.ndarray):
+        try:
+            A = np.asarray(F)
+        except ValueError:          # ragged: faces of different sizes
+            A = None
+        if A is None or A.dtype == object:
+            if elements != "auto":
+                raise ValueError(f"elements={elements!r} needs an (m, k) array; faces of "
+                                 "different sizes are polygons (elements='polygon')")
+            return ("polygon", F)
+        F = A
+    if F.ndim != 2 or elements != "auto":
+        return ("cells", F)
+    k = F.shape[1]
+    if k >= 5:
+        return ("polygon", F)
+    if k != 4:
+        return ("cells", F)
+    Vp = np.asarray(V, dtype=np.float64)
+    if Vp.ndim != 2 or Vp.shape[1] != 3 or F.size == 0 or not np.issubdtype(F.dtype, np.integer) \
+            or F.min() < 0 or F.max() >= len(Vp):
+        if Vp.ndim == 2 and Vp.shape[1] == 2:
+            return ("polygon", F)   # four planar points are a quad, never a tetrahedron
+        return ("cells", F)         # let the validation report the problem
+    X = Vp[F]
+    with np.errstate(over="ignore", invalid="ignore"):
+        vol = np.abs(np.einsum("ij,ij->i", _cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]),
+                               X[:, 3] - X[:, 0])) / 6.0
+        ell = np.mean([np.linalg.norm(X[:, a] - X[:, b], axis=1)
+                       for a in range(4) for b in range(a + 1, 4)], axis=0)
+        thin = float(np.median(vol / ell ** 3)) < 0.02 if np.all(np.isfinite(ell)) else False
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 3]], F[:, [3, 0]]]), axis=1)
+    _, count = np.unique(e, axis=0, return_counts=True)
+    if thin and count.max() <= 2:
+        return ("polygon", F)
+    return ("cells", F)
+
+
+def laplacian(V, F=None, weights: str = "cotan", mass: str = "full", elements: str = "auto") -> Laplacian:
+    r"""Laplacian of a triangle mesh ``(V, F)``, tetrahedral mesh ``(V, T)`` or polygon mesh.
 
     Parameters
     ----------
-    V : (n, 3) float
-        Vertex positions (``(n, 2)`` allowed for planar triangle meshes).
-    F : (m, 3) or (m, 4) int
-        Triangles, or tetrahedra when there are 4 columns.
-    weights : {"cotan", "intrinsic_delaunay", "uniform"}
+    V : (n, 3) float, or a mesh object
+        Vertex positions (``(n, 2)`` allowed for planar triangle meshes); or a pyvista
+        ``PolyData``/``UnstructuredGrid``, ``trimesh.Trimesh`` or ``meshio.Mesh``, with
+        ``F`` omitted (its tetrahedra if it has any, else its triangles).
+    F : (m, 3), (m, 4) or (m, k) int, or a list of index lists, optional
+        Triangles, tetrahedra, or polygons; see ``elements``.
+    elements : {"auto", "triangle", "tet", "polygon"}
+        How to read ``F``. ``"auto"``: 3 columns are triangles; 5 or more columns, or a
+        list of faces of different sizes, are polygons; 4 columns are decided by
+        shape: ``F`` is a quad mesh when its boundary cycles (0, 1), (1, 2), (2, 3),
+        (3, 0) form an edge-manifold surface (every such edge shared by at most two
+        cells; in a tetrahedral mesh interior edges are shared by 3 or more) *and* the
+        cells are thin (median volume below :math:`0.02\,\bar\ell^3`, :math:`\bar\ell`
+        the cell's mean edge length; a regular tetrahedron has :math:`0.118\,\bar\ell^3`),
+        and goes to the polygon Laplacian; otherwise ``F`` holds tetrahedra. Points in
+        the plane (``V`` of shape ``(n, 2)``) make quads. ``"polygon"``
+        always takes the faces as polygons (:func:`~spectral_igl.laplacian.polygon.polygon_laplacian`,
+        Bunge et al. 2020; ``mass="full"`` is its :math:`P^\top M P`, the other masses its
+        lumped row sums; ``weights`` must be ``"cotan"``). On triangles it equals the
+        cotan Laplacian.
+    weights : {"cotan", "intrinsic_delaunay", "uniform", "mean_value"}
         ``"cotan"``: linear FEM stiffness (libigl ``cotmatrix``), triangles and tets.
         ``"intrinsic_delaunay"``: cotan weights of the intrinsic Delaunay triangulation
         (Bobenko--Springborn), non-negative off the diagonal; triangles only. On a mesh
         with non-manifold edges, where edge flips are undefined, it falls back to
         ``"cotan"`` with a warning. ``"uniform"``: graph Laplacian, unit edge weights.
+        ``"mean_value"``: Floater's mean-value weights (triangles only,
+        :func:`mean_value_weights`), positive for every triangle shape. They are not
+        symmetric (:math:`w_{ij}` uses the angles at :math:`x_i`); the survey lists them as
+        "always positive" and asks of every Laplacian a symmetric PSD stiffness with null
+        row sums, so the stiffness uses :math:`(W + W^\top)/2`:
+        :math:`L = \operatorname{diag}(\bar W\mathbf 1) - \bar W`,
+        :math:`\bar W = (W + W^\top)/2`. Unlike cotan they are not the FEM stiffness and do
+        not converge to the Laplace--Beltrami operator on general meshes.
     mass : {"full", "lumped", "barycentric"}
         ``"full"``: consistent linear-FEM mass (default). ``"lumped"`` (alias
         ``"voronoi"``): the mixed Voronoi cell area (Meyer et al. 2003) for triangles, the
@@ -185,7 +295,25 @@ def laplacian(V, F, weights: str = "cotan", mass: str = "full") -> Laplacian:
         raise ValueError(f"weights must be one of {_WEIGHTS}, got {weights!r}")
     if mass not in MASSES:
         raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
-    V, C, dropped, meas = clean_mesh_with_measures(V, F)
+    if elements not in _ELEMENTS:
+        raise ValueError(f"elements must be one of {_ELEMENTS}, got {elements!r}")
+    if F is None:
+        V, F = as_mesh_arrays(V, F)
+    F = _element_kind(V, F, elements)
+    if F[0] == "polygon":
+        from .polygon import polygon_laplacian
+
+        if weights != "cotan":
+            raise ValueError(f"polygon meshes take weights='cotan' only, got {weights!r}")
+        Vp = as_points(V, "V", dims=(2, 3))
+        if Vp.shape[1] == 2:
+            Vp = np.c_[Vp, np.zeros(len(Vp))]
+        return polygon_laplacian(Vp, F[1], mass="full" if mass == "full" else "lumped")
+    if elements == "tet" and np.shape(F[1])[1:] != (4,):
+        raise ValueError(f"elements='tet' needs an (m, 4) array, got shape {np.shape(F[1])}")
+    if elements == "triangle" and np.shape(F[1])[1:] != (3,):
+        raise ValueError(f"elements='triangle' needs an (m, 3) array, got shape {np.shape(F[1])}")
+    V, C, dropped, meas = clean_mesh_with_measures(V, F[1])
     n = V.shape[0]
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",

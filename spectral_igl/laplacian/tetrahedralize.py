@@ -3,13 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_cells, as_points, as_positive
+from .._validate import as_cells, as_mesh_arrays, as_points, as_positive
 from .mesh import element_measures
 
 __all__ = ["tetrahedralize"]
 
 
-def tetrahedralize(V, F, edge_length_fac: float = 0.05, edge_length_abs: float | None = None,
+def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: float | None = None,
                    epsilon: float = 1e-3, optimize: bool = True, quiet: bool = True):
     r"""Tetrahedral mesh of the volume enclosed by a surface, through fTetWild.
 
@@ -18,8 +18,8 @@ def tetrahedralize(V, F, edge_length_fac: float = 0.05, edge_length_abs: float |
 
     Parameters
     ----------
-    V : (n, 3) float
-    F : (m, 3) int
+    V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``F`` omitted
+    F : (m, 3) int, optional
         A closed (or nearly closed) triangle surface.
     edge_length_fac : float in (0, 1]
         Target tetrahedron edge length as a fraction of the bounding-box diagonal.
@@ -45,6 +45,7 @@ def tetrahedralize(V, F, edge_length_fac: float = 0.05, edge_length_abs: float |
     >>> T.shape[1]
     4
     """
+    V, F = as_mesh_arrays(V, F)
     V = as_points(V, "V", dims=(3,), min_rows=4)
     F = as_cells(F, V.shape[0], "F", sizes=(3,))
     edge_length_fac = as_positive(edge_length_fac, "edge_length_fac")

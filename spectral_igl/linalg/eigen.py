@@ -8,12 +8,13 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from ..laplacian import Laplacian, as_laplacian, lambda_max
+from ..progress import progress_bar
 from .factor import factorize
 
 __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive"]
 
 
-def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto"):
+def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progress=None):
     r"""The ``k`` smallest generalized eigenpairs :math:`L x = \lambda B x`.
 
     Shift-invert Lanczos (ARPACK) in the B-inner product, with ker L deflated exactly:
@@ -29,6 +30,12 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto"):
         Number of eigenpairs, ``1 <= k < n``.
     tol : float
         ARPACK relative tolerance (0 = machine precision).
+    backend : str
+        Sparse factorization of the shift, see :func:`spectral_igl.linalg.shifted_factor`.
+    progress : bool, optional
+        A progress counter on stderr: the shift's factorization, then one step per
+        solve of the Lanczos iteration, whose number is not known in advance (see
+        :mod:`spectral_igl.progress`; default off).
 
     Returns
     -------
@@ -51,19 +58,24 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto"):
     B = lap.B
     # shift: any s > 0 keeps L + sB positive definite; kernel directions are projected out
     s = 1e-3 * float(lap.L.diagonal().sum() / B.diagonal().sum()) / max(n, 1) ** 0.5
+    bar = progress_bar(None, f"eigs k={k}", progress, unit="solve")
+    bar.set_postfix_str("factorization")
     fac = factorize(lap.L + s * B, backend=backend)
+    bar.set_postfix_str("Lanczos")
 
     def project(y):
         return y - Z @ (Z.T @ (B @ y))
 
     def op(x):  # (L + sB)^{-1} x restricted to the complement of ker L; x = B v in mode 3
         x = x - B @ (Z @ (Z.T @ x))
+        bar.update()
         return project(fac.solve(x))
 
     Op = spla.LinearOperator((n, n), matvec=op, dtype=np.float64)
     v0 = project(np.random.default_rng(0).standard_normal(n))
     ncv = min(n - c - 1, max(2 * m + 1, m + 32))
     vals, vecs = spla.eigsh(lap.L, k=m, M=B, sigma=-s, which="LM", OPinv=Op, v0=v0, tol=tol, ncv=ncv)
+    bar.close()
     order = np.argsort(vals)
     vals, vecs = np.maximum(vals[order], 0.0), vecs[:, order]
     Zd = Z.toarray()

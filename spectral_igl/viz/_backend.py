@@ -5,6 +5,7 @@ and ``import spectral_igl.viz`` stay light.
 """
 from __future__ import annotations
 
+import functools
 import os
 import sys
 
@@ -14,18 +15,59 @@ from .._validate import as_cells, as_points, describe
 
 INSTALL_HINT = 'pip install "spectral_igl[viz]"'
 
-# Colours of the survey: distances go from blue (minimum) to red (maximum); other
-# functions use a cyclic map red -> yellow -> green -> cyan -> blue -> magenta -> red.
+# Colour maps by meaning. Distances and other non-negative quantities: a sequential map
+# from blue (minimum) to red (maximum), the survey's colours. Signed quantities (eigen-
+# functions, biharmonic kernels, differences): a diverging map, blue - white - red, centred
+# at 0. The hue circle is kept for periodic data (angles, phases) only: its two ends are the
+# same colour, so on anything else the minimum and the maximum look alike.
 DISTANCE_COLORS = ["#0000ff", "#00ffff", "#00ff00", "#ffff00", "#ff0000"]
+DIVERGING_COLORS = ["#2040b0", "#5b8fd6", "#c4d8ef", "#f7f7f7", "#f4c6a8", "#d6604d", "#a01020"]
 CYCLIC_COLORS = ["#ff0000", "#ffff00", "#00ff00", "#00ffff", "#0000ff", "#ff00ff", "#ff0000"]
+#: colour of the parts a source does not reach (other components): outside every scale
+NEUTRAL_COLOR = "#a8a8a8"
+#: colour kinds: how the values are read, hence the map and the range
+KINDS = ("auto", "distance", "sequential", "diverging", "cyclic")
 CRITICAL_COLORS = {"minimum": "#1f3cff", "maximum": "#ff2020", "saddle": "#20c020"}
 
 
 def headless() -> bool:
-    """True when no display server is reachable (Linux without ``DISPLAY``/``WAYLAND_DISPLAY``)."""
+    """True when no display server is reachable (see :func:`spectral_igl.viz.display_available`)."""
+    return not display_available()
+
+
+def display_available() -> bool:
+    """Whether an on-screen window can be opened.
+
+    Linux: ``WAYLAND_DISPLAY`` is trusted; ``DISPLAY`` is tried (``XOpenDisplay`` through
+    libX11 when the library is present), so that a stale or unreachable ``DISPLAY`` counts
+    as no display. Other systems: True.
+    """
     if not sys.platform.startswith("linux"):
+        return True
+    if os.environ.get("WAYLAND_DISPLAY"):
+        return True
+    return _x_display_opens(os.environ.get("DISPLAY") or "")
+
+
+@functools.lru_cache(maxsize=8)
+def _x_display_opens(name: str) -> bool:
+    if not name:
         return False
-    return not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    import ctypes
+    import ctypes.util
+
+    try:
+        x11 = ctypes.CDLL(ctypes.util.find_library("X11") or "libX11.so.6")
+    except OSError:  # cannot check without libX11: trust the variable
+        return True
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    handle = x11.XOpenDisplay(name.encode())
+    if not handle:
+        return False
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XCloseDisplay(handle)
+    return True
 
 
 def pyvista():
@@ -59,14 +101,24 @@ def pyplot():
 
 
 def colormap(name):
-    """A matplotlib colormap: ``"distance"`` (blue to red), ``"cyclic"`` (hue circle) or any name."""
+    """A matplotlib colormap by meaning or by name.
+
+    ``"distance"`` / ``"sequential"``: blue (minimum) to red (maximum), for non-negative
+    quantities; ``"diverging"``: blue - white - red, for signed quantities (drawn with a
+    range centred at 0); ``"cyclic"``: the hue circle, for periodic data only; any other
+    string is a matplotlib colormap name; a ``Colormap`` is returned as is.
+    """
     pyplot()
     from matplotlib.colors import Colormap, LinearSegmentedColormap
 
     if isinstance(name, Colormap):
         return name
-    if name == "distance":
+    if not isinstance(name, str):
+        raise TypeError(f"colormap must be a name or a matplotlib Colormap, got {type(name).__name__}")
+    if name in ("distance", "sequential"):
         return LinearSegmentedColormap.from_list("spectral_igl_distance", DISTANCE_COLORS, N=256)
+    if name == "diverging":
+        return LinearSegmentedColormap.from_list("spectral_igl_diverging", DIVERGING_COLORS, N=256)
     if name == "cyclic":
         return LinearSegmentedColormap.from_list("spectral_igl_cyclic", CYCLIC_COLORS, N=256)
     import matplotlib
@@ -74,7 +126,33 @@ def colormap(name):
     try:
         return matplotlib.colormaps[name]
     except KeyError as err:
-        raise ValueError(f"unknown colormap {name!r}; use 'distance', 'cyclic' or a matplotlib name") from err
+        raise ValueError(f"unknown colormap {name!r}; use 'distance', 'sequential', 'diverging', "
+                         "'cyclic' or a matplotlib name") from err
+
+
+def color_kind(values, kind="auto", rtol=1e-6):
+    """How to read ``values``: ``"sequential"`` or ``"diverging"`` (or ``"cyclic"`` if asked).
+
+    ``"auto"``: diverging when the values take both signs beyond ``rtol`` times their
+    largest magnitude (rounding-level negative values of a non-negative kernel do not
+    count), sequential otherwise. ``"distance"`` is sequential. A matplotlib name is read
+    as sequential.
+
+    Examples
+    --------
+    >>> color_kind([0.0, 1.0, 2.0]), color_kind([-1.0, 2.0]), color_kind([-1e-12, 1.0])
+    ('sequential', 'diverging', 'sequential')
+    """
+    if kind in ("diverging", "cyclic"):
+        return kind
+    if kind != "auto":
+        return "sequential"
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return "sequential"
+    big = float(np.max(np.abs(v)))
+    return "diverging" if (v.min() < -rtol * big and v.max() > rtol * big) else "sequential"
 
 
 def to_pyvista(shape):

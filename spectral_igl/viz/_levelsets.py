@@ -3,11 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._backend import CRITICAL_COLORS, colormap, headless, pyvista, save_png, to_pyvista
+from ._backend import (CRITICAL_COLORS, KINDS, NEUTRAL_COLOR, color_kind, colormap, headless, pyvista,
+                       save_png, to_pyvista)
+from ._camera import fit_view, parse_view, place_camera
 
-__all__ = ["plot_levelsets", "levelset_values"]
+__all__ = ["plot_levelsets", "levelset_values", "reached_vertices"]
 
-_KINDS = ("distance", "cyclic")
 _VOLUME = ("boundary", "clip", "slices", "isosurfaces")
 
 
@@ -51,11 +52,57 @@ def _critical_sets(critical):
     return out
 
 
-def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_scale=True,
+def reached_vertices(mesh, sources=None):
+    """Vertices in the connected components that contain a source.
+
+    Parameters
+    ----------
+    mesh : pyvista.DataSet
+        Triangles, tetrahedra or a point set.
+    sources : sequence of int, optional
+        Without sources: every vertex that belongs to a cell (a point set: every point).
+
+    Returns
+    -------
+    (n,) bool
+    """
+    n = mesh.n_points
+    cells = _cell_array(mesh)
+    if cells is None:
+        return np.ones(n, dtype=bool)
+    used = np.zeros(n, dtype=bool)
+    used[cells.ravel()] = True
+    src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
+    if src.size == 0:
+        return used
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    k = cells.shape[1]
+    rows = np.repeat(cells[:, 0], k - 1)
+    cols = cells[:, 1:].ravel()
+    A = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+    _, label = connected_components(A, directed=False)
+    return np.isin(label, label[src])
+
+
+def _cell_array(mesh):
+    """(m, k) int cells of a triangle or tetrahedral dataset, ``None`` for a point set."""
+    pv = pyvista()
+    if isinstance(mesh, pv.UnstructuredGrid):
+        return np.asarray(mesh.cells_dict.get(pv.CellType.TETRA, np.empty((0, 4))), dtype=np.int64)
+    if isinstance(mesh, pv.PolyData) and mesh.n_cells and mesh.n_verts != mesh.n_cells:
+        tri = mesh if mesh.is_all_triangles else mesh.triangulate()
+        return np.asarray(tri.faces).reshape(-1, 4)[:, 1:].astype(np.int64)
+    return None
+
+
+def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, shared_scale=True,
                    sources=None, critical=None, volume="clip", title=None, labels=None,
                    plotter=None, filename=None, off_screen=None, window_size=None,
-                   camera_position=None, zoom=None, source_color="black", scalar_bar=True, line_width=2.0,
-                   point_size=None, show_edges=False, background="white"):
+                   camera="auto", camera_position=None, zoom=None, source_color="black",
+                   scalar_bar=True, line_width=2.0, point_size=None, show_edges=False,
+                   background="white", neutral_color=None):
     r"""Draw a scalar function on a shape with iso-lines at uniformly sampled values.
 
     Parameters
@@ -67,25 +114,40 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         several shapes side by side.
     f : (n,) float, or a list of them (one per shape)
         Values at the vertices/points.
-    kind : {"distance", "cyclic"} or a matplotlib colormap name
-        ``"distance"``: blue at the minimum to red at the maximum. ``"cyclic"``: the
-        survey's hue circle red -> yellow -> green -> cyan -> blue -> magenta -> red, for
-        kernels, eigenfunctions and other functions.
-    n_levels : int
-        Number of iso-values, uniformly sampled in the open colour range.
+    kind : {"auto", "distance", "sequential", "diverging", "cyclic"} or a colormap name
+        What the values mean, which fixes the colour map and the range. ``"distance"``
+        and ``"sequential"`` (non-negative quantities): blue at the minimum to red at the
+        maximum. ``"diverging"`` (signed quantities): blue - white - red with the range
+        centred at 0, :math:`[-\max|f|, \max|f|]`. ``"cyclic"``: the hue circle, whose
+        ends are the same colour -- for periodic data only. ``"auto"`` (default): diverging
+        when ``f`` takes both signs, else sequential. A matplotlib name is drawn over the
+        range of ``f``.
+    cmap : str or matplotlib Colormap, optional
+        Use this colour map instead of the one ``kind`` implies (the range still follows
+        ``kind``).
+    n_levels : int or list of int
+        Number of iso-values, uniformly sampled in the open colour range (one per shape
+        with a list; 0 draws no iso-lines).
     clim : (2,) float, optional
-        Colour range; default the range of ``f`` (of all ``f`` when ``shared_scale``).
+        Colour range; default from ``kind`` and the values of ``f`` on the reached parts
+        (of all ``f`` when ``shared_scale``).
     shared_scale : bool
         With several shapes, use one colour scale and one set of iso-values for all.
-    sources : int or sequence of int, optional
-        Vertices drawn as dots (source points of distances and kernels).
+    sources : int, sequence of int, or a list of them (one per shape), optional
+        Source vertices, marked by dots (with several shapes: the same indices in every
+        panel, or one entry per panel, ``None`` for none). Connected components containing no source (and
+        vertices in no cell, and non-finite values) are drawn in a neutral grey and kept
+        out of the colour range.
     critical : dict or object, optional
         Critical points ``{"minimum": idx, "maximum": idx, "saddle": idx}`` (or an object
         with attributes ``minima``, ``maxima``, ``saddles``), marked blue, red and green.
     volume : {"clip", "slices", "boundary", "isosurfaces"}
-        How a tetrahedral mesh is shown: boundary cut away by a plane, boundary plus three
-        orthogonal slices, boundary only, or iso-surfaces inside a translucent boundary.
-        Iso-values of volumes are sampled in the range on the boundary (as in the survey).
+        How a tetrahedral mesh is shown: boundary with the quarter ``x > x_s, y > y_s`` cut
+        away (``s`` the first source, else the centre), boundary plus three
+        orthogonal slices (through the first source, else the centre), boundary only, or
+        iso-surfaces inside a translucent boundary.
+        Iso-values of volumes are sampled in the range on the boundary (as in the survey),
+        or over the whole volume when there are sources (the cut shows them).
     title : str, optional
         Text at the top (of each panel when ``labels`` is given).
     labels : list of str, optional
@@ -98,26 +160,39 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         Default: off screen when no display is available or ``filename`` is given.
     window_size : (2,) int, optional
         Pixels; default 600 x 600 per panel.
-    camera_position : str or list, optional
-        A pyvista camera position (``"iso"``, ``"xy"``, ...). Default: facing the first
-        source when ``sources`` is given, else ``"iso"``.
+    camera : str, (3,) float or pyvista camera position
+        ``"auto"`` (default): face the first source -- or, without sources, the minimum of
+        ``f`` (both its minimum and maximum when ``f`` is signed) -- from outside the shape, along the outward normal there when a ray test
+        shows it unobstructed (else the best of a few other directions), with the up
+        direction from the principal axes of the shape (:func:`spectral_igl.viz.auto_view`).
+        A tetrahedral mesh drawn inside (``volume`` other than ``"boundary"``) is seen from
+        ``"iso"``, facing the cut (which passes through the first source, as do the slices).
+        Or a named view ``"iso"``, ``"+x"``, ``"-z"``, ...; a direction ``(dx, dy, dz)``
+        from the shape towards the camera; a pyvista camera position.
+    camera_position : optional
+        Older name of ``camera``; used when given.
     zoom : float, optional
-        Camera zoom after fitting the shape; default 1.2 for surfaces and point sets,
-        1.0 for volumes (whose bounding box fills the picture).
+        Camera zoom after fitting the bounding sphere of the shape. Default: surfaces and
+        point sets are fitted to fill the panel between the title and the colour bar;
+        volumes keep their bounding box in the picture.
     source_color : str
         Colour of the source dots.
+    neutral_color : str, optional
+        Colour of the parts outside the scale (default a neutral grey).
 
     Returns
     -------
     pyvista.Plotter
         The plotter (closed when ``filename`` was given; its last image is in
-        ``plotter.last_image``).
+        ``plotter.last_image``). ``plotter.spectral_igl_views`` lists, per panel, the
+        camera ``direction``, ``up`` and the ``visible`` fraction of the target's
+        neighbourhood, the colour ``kind`` and ``clim`` used.
 
     Examples
     --------
     >>> from data_generators import icosphere
     >>> V, F = icosphere(2)
-    >>> p = plot_levelsets((V, F), V[:, 2], kind="cyclic", filename="z.png")  # doctest: +SKIP
+    >>> p = plot_levelsets((V, F), V[:, 2], filename="z.png")  # doctest: +SKIP
     """
     pv = pyvista()
     lines_over_surfaces()
@@ -127,17 +202,26 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         raise ValueError(f"got {len(shapes)} shape(s) but {len(fs)} function(s)")
     if labels is not None and len(labels) != len(shapes):
         raise ValueError(f"got {len(labels)} label(s) for {len(shapes)} shape(s)")
-    if kind not in _KINDS and not isinstance(kind, str):
+    if not isinstance(kind, str):
         raise TypeError(f"kind must be a string, got {type(kind).__name__}")
     if volume not in _VOLUME:
         raise ValueError(f"volume must be one of {_VOLUME}, got {volume!r}")
-    n_levels = int(n_levels)
-    cmap = colormap(kind)
+    levels = list(n_levels) if isinstance(n_levels, (list, tuple)) else [n_levels] * len(shapes)
+    if len(levels) != len(shapes):
+        raise ValueError(f"got {len(levels)} n_levels for {len(shapes)} shape(s)")
+    levels = [int(k) for k in levels]
+    if any(k < 0 for k in levels):
+        raise ValueError(f"n_levels must be >= 0, got {n_levels}")
+    if camera_position is not None:
+        camera = camera_position
+    parse_view(camera)  # a bad camera is refused before any drawing
     if plotter is not None and len(shapes) > 1:
         raise ValueError("pass plotter only with a single shape")
+    neutral = neutral_color or NEUTRAL_COLOR
 
-    meshes, values = [], []
-    for s, fi in zip(shapes, fs):
+    per_sources = _sources_per_panel(sources, len(shapes))
+    meshes, values, reached = [], [], []
+    for s, fi, sources in zip(shapes, fs, per_sources):
         mesh, mkind = to_pyvista(s)
         fi = np.asarray(fi)
         if np.iscomplexobj(fi):
@@ -145,24 +229,46 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         fi = fi.astype(float).ravel()
         if fi.shape[0] != mesh.n_points:
             raise ValueError(f"f has {fi.shape[0]} values but the shape has {mesh.n_points} vertices")
+        src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
+        if src.size and (src.min() < 0 or src.max() >= mesh.n_points):
+            raise ValueError(f"source index out of range [0, {mesh.n_points})")
         meshes.append((mesh, mkind))
         values.append(fi)
+        reached.append(reached_vertices(mesh, src) & np.isfinite(fi))
 
-    def _range(mesh, mkind, fi):
-        if mkind == "tet":  # range on the boundary, as in the survey's Fig. 8
+    # what the values mean: one reading for all panels of a shared scale
+    known = kind in KINDS
+    if known:
+        pooled = np.concatenate([fi[r] for fi, r in zip(values, reached)])
+        meaning = color_kind(pooled, kind)
+        per_panel = [color_kind(fi[r], kind) for fi, r in zip(values, reached)]
+    else:
+        meaning, per_panel = "sequential", ["sequential"] * len(values)
+    if shared_scale or clim is not None:
+        per_panel = [meaning] * len(values)
+    cmaps = [colormap(cmap if cmap is not None else (kind if not known else
+                      ("distance" if m == "sequential" else m))) for m in per_panel]
+
+    def _range(mesh, mkind, fi, ok, src):
+        if mkind == "tet" and (src is None or np.size(src) == 0):  # range on the boundary, as in the survey's Fig. 8
             surf = outer_surface(mesh)
             ids = surf.point_data.get("vtkOriginalPointIds")
-            fi = fi[np.asarray(ids)] if ids is not None else fi
-        fin = fi[np.isfinite(fi)]
+            if ids is not None:
+                ids = np.asarray(ids)
+                fi, ok = fi[ids], ok[ids]
+        fin = fi[ok]
         return (float(fin.min()), float(fin.max())) if fin.size else (0.0, 1.0)
 
-    ranges = [_range(m, k, fi) for (m, k), fi in zip(meshes, values)]
+    ranges = [_range(m, k, fi, r, sp) for (m, k), fi, r, sp in zip(meshes, values, reached, per_sources)]
     if clim is not None:
         clim = (float(clim[0]), float(clim[1]))
         ranges = [clim] * len(meshes)
-    elif shared_scale and len(meshes) > 1:
-        shared = (min(r[0] for r in ranges), max(r[1] for r in ranges))
-        ranges = [shared] * len(meshes)
+    else:
+        if shared_scale and len(meshes) > 1:
+            shared = (min(r[0] for r in ranges), max(r[1] for r in ranges))
+            ranges = [shared] * len(meshes)
+        ranges = [(-max(abs(lo), abs(hi)), max(abs(lo), abs(hi))) if m == "diverging" else (lo, hi)
+                  for (lo, hi), m in zip(ranges, per_panel)]
 
     if off_screen is None:
         off_screen = bool(filename is not None or headless() or pv.OFF_SCREEN)
@@ -172,43 +278,50 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         plotter = pv.Plotter(shape=(1, ncol), off_screen=off_screen, window_size=size,
                              border=False)
     plotter.set_background(background)
+    views = []
 
-    for j, ((mesh, mkind), fi, rng) in enumerate(zip(meshes, values, ranges)):
+    for j, ((mesh, mkind), fi, ok, rng) in enumerate(zip(meshes, values, reached, ranges)):
+        sources = per_sources[j]
         if ncol > 1:
             plotter.subplot(0, j)
         lo, hi = rng
         if hi <= lo:
             hi = lo + 1.0
-        iso = levelset_values(lo, hi, n_levels)
+        iso = levelset_values(lo, hi, levels[j])
         mesh = mesh.copy()
-        mesh.point_data["f"] = fi
+        mesh.point_data["f"] = np.where(ok, fi, np.nan)
         # pyvista links mappers whose scalar bars share a title: one title per colour scale
         bar_title = " " if (shared_scale or clim is not None) else " " * (j + 1)
         sb = dict(title=bar_title, color="black", n_labels=3, fmt="%.3g", vertical=False,
                   width=0.6, position_x=0.2, position_y=0.03, label_font_size=12)
         show_bar = bool(scalar_bar and (j == ncol - 1 or not (shared_scale or clim is not None)))
-        common = dict(scalars="f", cmap=cmap, clim=(lo, hi), show_scalar_bar=show_bar,
-                      scalar_bar_args=sb)
+        common = dict(scalars="f", cmap=cmaps[j], clim=(lo, hi), show_scalar_bar=show_bar,
+                      scalar_bar_args=sb, nan_color=neutral, ambient=0.25, diffuse=0.8)
+        main, rest = split_reached(pv, mesh, mkind, ok)
+        if rest is not None:  # the parts out of reach: grey, no scale, no lines
+            if mkind == "points":
+                plotter.add_mesh(rest, color=neutral, render_points_as_spheres=True,
+                                 point_size=point_size or 4.0, show_scalar_bar=False)
+            else:
+                grey = outer_surface(rest) if mkind == "tet" else rest
+                plotter.add_mesh(grey, color=neutral, smooth_shading=True, show_scalar_bar=False)
         if mkind == "triangle":
-            plotter.add_mesh(mesh, smooth_shading=True, show_edges=show_edges, **common)
-            _add_isolines(plotter, mesh, iso, line_width)
+            plotter.add_mesh(main, smooth_shading=True, show_edges=show_edges, **common)
+            _add_isolines(plotter, main, iso, line_width)
         elif mkind == "points":
             panel = plotter.window_size[0] / ncol  # pixels across this panel
-            ps = point_size or max(3.0, 0.5 * panel / np.sqrt(max(mesh.n_points, 1)))
-            plotter.add_mesh(mesh, render_points_as_spheres=True, point_size=ps, **common)
-        else:
-            _add_volume(plotter, pv, mesh, iso, volume, common, line_width)
-        if sources is not None:
-            src = np.atleast_1d(np.asarray(sources, dtype=np.int64))
-            if src.size and (src.min() < 0 or src.max() >= mesh.n_points):
-                raise ValueError(f"source index out of range [0, {mesh.n_points})")
-            plotter.add_points(np.asarray(mesh.points)[src], color=source_color,
-                               render_points_as_spheres=True, point_size=16)
+            ps = point_size or max(3.0, 0.5 * panel / np.sqrt(max(main.n_points, 1)))
+            plotter.add_mesh(main, render_points_as_spheres=True, point_size=ps, **common)
+        P = np.asarray(mesh.points)
+        src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
+        if mkind == "tet":  # the cut of "clip" passes through the source, which it shows
+            _add_volume(plotter, pv, main, iso, volume, common, line_width,
+                        cut_at=P[src[0]] if src.size else None)
         for crit_kind, idx in _critical_sets(critical).items():
             if idx.size:
                 if idx.min() < 0 or idx.max() >= mesh.n_points:
                     raise ValueError(f"{crit_kind} index out of range [0, {mesh.n_points})")
-                plotter.add_points(np.asarray(mesh.points)[idx], color=CRITICAL_COLORS[crit_kind],
+                plotter.add_points(P[idx], color=CRITICAL_COLORS[crit_kind],
                                    render_points_as_spheres=True, point_size=14)
         caption = labels[j] if labels is not None else (title if j == 0 else None)
         if labels is not None and title and j == 0:
@@ -216,23 +329,128 @@ def plot_levelsets(shape, f, *, kind="distance", n_levels=12, clim=None, shared_
         if caption:
             panel = plotter.window_size[0] / ncol
             plotter.add_text(caption, position="upper_edge", color="black",
-                             font_size=int(np.clip(panel / 50, 7, 11)))
-        if camera_position is not None:
-            plotter.camera_position = camera_position
-        elif sources is not None and np.size(sources):
-            look_at(plotter, mesh, int(np.atleast_1d(sources)[0]))
+                             font_size=_font_size(caption, panel))
+        # where to look from
+        mode, _ = parse_view(camera)
+        drawn = outer_surface(mesh) if mkind == "tet" else mesh
+        target = None
+        if mode == "auto":
+            if mkind == "tet" and volume != "boundary":
+                camera_j = "iso"  # the cut (and the slices) through the source face the iso view
+            else:
+                camera_j = camera
+                if src.size:
+                    target = P[src[0]]
+                elif ok.any() and per_panel[j] == "diverging" and mkind != "tet":
+                    cand = np.flatnonzero(ok)  # a signed function: both ends of the scale
+                    target = P[[cand[np.argmin(fi[cand])], cand[np.argmax(fi[cand])]]]
+                elif ok.any():
+                    cand = np.flatnonzero(ok)
+                    if mkind == "tet":
+                        ids = drawn.point_data.get("vtkOriginalPointIds")
+                        if ids is not None:
+                            cand = np.intersect1d(cand, np.asarray(ids))
+                    if cand.size:
+                        target = P[cand[np.argmin(fi[cand])]]
+                if target is not None and mkind == "tet":  # nearest boundary point
+                    Q = np.asarray(drawn.points)
+                    target = Q[np.argmin(np.linalg.norm(Q - target, axis=1))]
         else:
-            plotter.camera_position = "iso"
-        plotter.reset_camera()
-        z = zoom if zoom is not None else (1.0 if mkind == "tet" else 1.2)
-        if z != 1.0:
-            plotter.camera.zoom(z)
+            camera_j = camera
+        same = j > 0 and mode == "auto" and views and views[0].get("direction") is not None and \
+            _same_points(meshes[0][0], mesh)
+        if same:  # the same shape in every panel: one view, so that panels compare at a glance
+            camera_j = views[0]["direction"]
+        view = place_camera(plotter, drawn if mkind != "points" else mesh, camera_j, target)
+        view.update(kind=per_panel[j], clim=(lo, hi))
+        views.append(view)
+        if zoom is None:  # fill the panel, leaving room for title and bar
+            fit_view(plotter, view.pop("points", P), height=0.74 if caption else 0.82,
+                     width=0.92, lift=0.035 if (caption and show_bar) else 0.0)
+        else:
+            view.pop("points", None)
+            z = zoom if zoom is not None else 1.0
+            if z != 1.0:
+                plotter.camera.zoom(z)
+        if src.size:
+            add_source_marker(plotter, P[src], source_color)
 
+    _set_attribute(pv, plotter, "spectral_igl_views", views)
     if filename is not None:
         image = plotter.screenshot(return_img=True)
         plotter.close()
         save_png(image, filename)
     return plotter
+
+
+def _same_points(a, b):
+    """Whether two datasets have the same vertex positions."""
+    return a.n_points == b.n_points and np.array_equal(np.asarray(a.points), np.asarray(b.points))
+
+
+def _sources_per_panel(sources, count):
+    """One source list (or None) per panel."""
+    if isinstance(sources, (list, tuple)) and count > 1 and len(sources) == count and \
+            any(s is None or np.ndim(s) > 0 for s in sources):
+        return [None if s is None else np.atleast_1d(np.asarray(s, dtype=np.int64)) for s in sources]
+    return [sources] * count
+
+
+def _set_attribute(pv, obj, name, value):
+    """Attach ``value`` to a pyvista object (newer pyvista refuses plain new attributes)."""
+    setter = getattr(pv, "set_new_attribute", None)
+    if setter is not None:
+        setter(obj, name, value)
+    else:  # pragma: no cover - older pyvista
+        setattr(obj, name, value)
+
+
+def _font_size(caption, panel):
+    """A font size (points) at which the longest line of ``caption`` fits in ``panel`` pixels."""
+    longest = max((len(line) for line in str(caption).splitlines()), default=1)
+    fit = 0.92 * panel / (0.62 * max(longest, 1))  # average glyph width ~0.62 em
+    return int(np.clip(min(panel / 50, fit), 6, 11))
+
+
+def add_source_marker(plotter, points, color="black", names=(None, None)):
+    """Source dots: a dark sphere on a white one, visible on every colour of every map.
+
+    The dark dot is moved towards the camera by a fraction of the white one's size, so
+    that it is drawn in front of it.
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    cam = plotter.camera
+    eye = np.asarray(cam.position, dtype=float)
+    focal = np.asarray(cam.focal_point, dtype=float)
+    dist = float(np.linalg.norm(eye - focal)) or 1.0
+    # world size of one pixel at the focal distance
+    h = 2.0 * dist * np.tan(np.radians(cam.view_angle) / 2.0) / max(plotter.window_size[1], 1)
+    toward = eye - points
+    toward /= np.maximum(np.linalg.norm(toward, axis=1, keepdims=True), 1e-300)
+    plotter.add_points(points, color="white", render_points_as_spheres=True, point_size=22,
+                       pickable=False, reset_camera=False, name=names[0])
+    plotter.add_points(points + 12.0 * h * toward, color=color, render_points_as_spheres=True,
+                       point_size=14, pickable=False, reset_camera=False, name=names[1])
+
+
+def split_reached(pv, mesh, mkind, ok):
+    """(part with values, part out of reach or None) of ``mesh``; cells need all corners reached."""
+    if ok.all():
+        return mesh, None
+    if mkind == "points":
+        idx = np.flatnonzero(ok)
+        other = np.flatnonzero(~ok)
+        return mesh.extract_points(idx), (mesh.extract_points(other) if other.size else None)
+    cells = _cell_array(mesh)
+    good = ok[cells].all(axis=1)
+    keep = np.flatnonzero(good)
+    drop = np.flatnonzero(~good)
+    main = mesh.extract_cells(keep)
+    rest = mesh.extract_cells(drop) if drop.size else None
+    if mkind == "triangle":
+        main = outer_surface(main)
+        rest = outer_surface(rest) if rest is not None else None
+    return main, rest
 
 
 def lines_over_surfaces():
@@ -245,21 +463,6 @@ def lines_over_surfaces():
     from vtkmodules.vtkRenderingCore import vtkMapper
 
     vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
-
-
-def look_at(plotter, mesh, vertex):
-    """Place the camera on the side of ``vertex``, slightly from above."""
-    c = np.asarray(mesh.center, dtype=float)
-    p = np.asarray(mesh.points[vertex], dtype=float)
-    d = p - c
-    if np.linalg.norm(d) < 1e-12 * max(mesh.length, 1e-300):
-        plotter.camera_position = "iso"
-        return
-    d /= np.linalg.norm(d)
-    up = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    d = d + 0.35 * up + 0.25 * np.cross(up, d)
-    d /= np.linalg.norm(d)
-    plotter.camera_position = [tuple(c + 3.0 * mesh.length * d), tuple(c), tuple(up)]
 
 
 def outer_surface(grid):
@@ -279,23 +482,27 @@ def _add_isolines(plotter, surface, iso, line_width):
         plotter.add_mesh(lines, color="black", line_width=line_width, show_scalar_bar=False)
 
 
-def _add_volume(plotter, pv, grid, iso, volume, common, line_width):
+def _add_volume(plotter, pv, grid, iso, volume, common, line_width, cut_at=None):
     surf = outer_surface(grid)
-    center = np.asarray(grid.center)
+    center = np.asarray(grid.center) if cut_at is None else np.asarray(cut_at, dtype=float)
     if volume == "boundary":
         plotter.add_mesh(surf, smooth_shading=True, **common)
         _add_isolines(plotter, surf, iso, line_width)
         return
     if volume == "clip":
-        # cut away the quarter facing the camera (x > cx and y > cy) to show the inside
-        P = np.asarray(grid.points)
-        grid = grid.copy()
-        grid.point_data["_cut"] = np.minimum(P[:, 0] - center[0], P[:, 1] - center[1])
-        inside = grid.clip_scalar(scalars="_cut", value=0.0, invert=True)
-        inside.set_active_scalars("f")
-        shell = outer_surface(inside)
-        plotter.add_mesh(shell, **common)
-        _add_isolines(plotter, shell, iso, line_width)
+        # cut away the quarter facing the camera (x > cx and y > cy) to show the inside: the
+        # part x < cx, and the part x > cx, y < cy, each cut by an exact plane (one cut by
+        # min(x - cx, y - cy) would leave pieces of the corner's tetrahedra standing)
+        left = grid.clip(normal=(1.0, 0.0, 0.0), origin=center, invert=True)
+        right = grid.clip(normal=(1.0, 0.0, 0.0), origin=center, invert=False)
+        right = right.clip(normal=(0.0, 1.0, 0.0), origin=center, invert=True) if right.n_cells else right
+        for part in (left, right):
+            if part.n_cells:
+                part.set_active_scalars("f")
+                shell = outer_surface(part)
+                plotter.add_mesh(shell, **common)
+                _add_isolines(plotter, shell, iso, line_width)
+                common = dict(common, show_scalar_bar=False)
         return
     if volume == "slices":
         plotter.add_mesh(surf, opacity=0.15, color="gray", show_scalar_bar=False)

@@ -1,0 +1,173 @@
+"""Point-cloud Laplacians beside robust_laplacian, in one run: accuracy, sparsity, heat-kernel cost.
+
+1. Unit sphere sampled four ways (Fibonacci, uniformly random, density ratio 3, jittered
+   grid), at two sizes: largest relative error of the first 16 nonzero eigenvalues
+   against l(l+1), and nonzeros per row of L.
+2. Vertices of real shapes (unit area) against the spectrum of their own mesh: median
+   relative error of the first 20 nonzero eigenvalues.
+3. Accuracy against nonzeros: k swept for each method on the random sphere.
+4. One heat-kernel column (``sig.heat_kernel``, tol 1e-8) on the vertices of a mesh with
+   the point-cloud operator against the same on the mesh, with ``--heat-n`` vertices
+   (the mesh is loop-subdivided until it has at least that many).
+
+Usage::
+
+    python benchmarks/point_clouds.py                 # 4k and 16k points, real shapes, 134k heat
+    python benchmarks/point_clouds.py --quick         # 2k and 8k, two shapes, no heat timing
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import spectral_igl as sig  # noqa: E402
+from data_generators import sphere_eigenvalues, sphere_points  # noqa: E402
+from spectral_igl.io import read_mesh  # noqa: E402
+
+MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "meshes"
+EX16 = sphere_eigenvalues(17)[1:]
+
+
+def fibonacci(n):
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = np.pi * (1 + 5 ** 0.5) * i
+    r = np.sqrt(1 - z * z)
+    return np.c_[r * np.cos(phi), r * np.sin(phi), z]
+
+
+def jittered(n, seed=0):
+    """Fibonacci points moved by a random fraction (0.3) of the spacing, back on the sphere."""
+    P = fibonacci(n)
+    h = np.sqrt(4 * np.pi / n)
+    P = P + 0.3 * h * np.random.default_rng(seed).standard_normal(P.shape)
+    return P / np.linalg.norm(P, axis=1, keepdims=True)
+
+
+SAMPLINGS = {"fibonacci": fibonacci, "random": lambda n: sphere_points(n, seed=3),
+             "density x3": lambda n: sphere_points(n, seed=4, nonuniform=1.0),
+             "jittered": jittered}
+
+
+def operator(P, method, k=None):
+    if method == "robust_laplacian":
+        import robust_laplacian
+
+        kw = {} if k is None else {"n_neighbors": k}
+        return robust_laplacian.point_cloud_laplacian(P, **kw)
+    lap = sig.point_cloud_laplacian(P, method=method, k=k)
+    return lap.L, lap.B
+
+
+def smallest(L, M, k):
+    return np.sort(spla.eigsh(L.tocsc(), k, M.tocsc(), sigma=-1e-4)[0])
+
+
+def spheres(sizes, methods):
+    print("## unit sphere: max rel. error of eigenvalues 1..16 (nnz per row of L)")
+    for name, gen in SAMPLINGS.items():
+        for n in sizes:
+            P = gen(n)
+            cells = []
+            for m in methods:
+                L, M = operator(P, m)
+                ev = smallest(L, M, 17)
+                cells.append(f"{m} {np.max(np.abs(ev[1:] - EX16) / EX16):.4f} ({L.nnz / n:.0f})")
+            print(f"{name:11s} {n:6d} | " + " | ".join(cells), flush=True)
+
+
+def shapes(names, methods):
+    print("## vertices of real shapes: median rel. error of eigenvalues 1..20 against the mesh")
+    for name in names:
+        path = MESHES / name
+        if not path.is_file():
+            print(f"{name}: not found, skipped")
+            continue
+        V, F = read_mesh(path)
+        used = np.unique(F)
+        V, F = V[used], np.searchsorted(used, F)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            lap = sig.laplacian(V, F)
+            V = V / np.sqrt(lap.area())
+            lap = sig.laplacian(V, F)
+        ref = smallest(lap.L, lap.B, 21)[1:]
+        cells = []
+        for m in methods:
+            L, M = operator(V, m)
+            ev = smallest(L, M, 21)[1:]
+            cells.append(f"{m} {np.median(np.abs(ev - ref) / ref):.4f}")
+        print(f"{name:18s} {len(V):6d} | " + " | ".join(cells), flush=True)
+
+
+def knee(n, ks):
+    print(f"## accuracy against nonzeros, random sphere n={n}: k, nnz/row, max rel. error 1..16")
+    P = sphere_points(n, seed=3)
+    for m, kk in ks.items():
+        for k in kk:
+            L, M = operator(P, m, k)
+            ev = smallest(L, M, 17)
+            print(f"{m:16s} k={k:3d} nnz/row {L.nnz / n:6.1f} err {np.max(np.abs(ev[1:] - EX16) / EX16):.4f}",
+                  flush=True)
+
+
+def heat(n_target, mesh="stanford-bunny.obj"):
+    import igl
+
+    path = MESHES / mesh
+    if not path.is_file():
+        print(f"{mesh}: not found, heat timing skipped")
+        return
+    V, F = read_mesh(path)
+    used = np.unique(F)
+    V, F = V[used], np.searchsorted(used, F)
+    while len(V) < n_target:
+        V, F = igl.upsample(V, F)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mesh_lap = sig.laplacian(V, F)
+    V = V / np.sqrt(mesh_lap.area())
+    mesh_lap = sig.laplacian(V, F)
+    i, t = int(np.argmax(V[:, 2])), 1e-3
+    print(f"## one heat-kernel column, t={t} (unit area), {len(V)} vertices of {mesh} (upsampled)")
+    for name, build in [("mesh (cotan)", lambda: mesh_lap),
+                        ("points delaunay", lambda: sig.point_cloud_laplacian(V)),
+                        ("points belkin", lambda: sig.point_cloud_laplacian(V, method="belkin"))]:
+        t0 = time.perf_counter()
+        lap = build()
+        tb = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        sig.heat_kernel(lap, t, i, tol=1e-8)
+        th = time.perf_counter() - t0
+        print(f"{name:16s} nnz/row {lap.L.nnz / lap.n:5.1f} build {tb:6.2f} s  heat column {th:6.2f} s", flush=True)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--heat-n", type=int, default=134_000)
+    a = p.parse_args(argv)
+    methods = ["delaunay", "robust_laplacian", "belkin", "liu"]
+    if a.quick:
+        spheres([2000, 8000], methods)
+        shapes(["spot.obj", "fertility.off"], methods)
+        return
+    spheres([4000, 16000], methods)
+    shapes(["spot.obj", "cow.obj", "fertility.off", "rocker-arm.obj", "cheburashka.obj",
+            "fandisk.obj", "homer.obj", "armadillo.obj", "stanford-bunny.obj", "suzanne.obj",
+            "beetle.obj"], methods[:3])
+    knee(16000, {"delaunay": [8, 12, 20, 30], "robust_laplacian": [12, 30],
+                 "belkin": [16, 32, 64]})
+    heat(a.heat_n)
+
+
+if __name__ == "__main__":
+    main()

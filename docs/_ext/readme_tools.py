@@ -1,0 +1,125 @@
+"""Sphinx helpers of the spectral_igl documentation.
+
+``.. gallery::`` shows every ``docs/gallery/*.png`` as a figure, captioned with the text the
+README's gallery table gives it (the file name when the README does not mention it).
+Short Python references in docstrings (``:func:`graph_extrema```) are resolved to the one
+documented object of that name; see :func:`resolve_short_names`.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from docutils import nodes
+from docutils.statemachine import StringList
+from sphinx.util.docutils import SphinxDirective
+
+ROOT = Path(__file__).resolve().parents[2]
+GALLERY = ROOT / "docs" / "gallery"
+
+
+def readme_captions(readme: Path) -> dict[str, str]:
+    """``{png file name: caption}`` from the README's ``![](docs/gallery/X.png) caption`` cells."""
+    if not readme.is_file():
+        return {}
+    text = readme.read_text(encoding="utf-8")
+    out = {}
+    for m in re.finditer(r"!\[[^\]]*\]\(docs/gallery/([^)]+\.png)\)\s*([^|\n]*)", text):
+        out[m.group(1)] = m.group(2).strip()
+    return out
+
+
+class Gallery(SphinxDirective):
+    """Every PNG of ``docs/gallery`` with its README caption, in file-name order."""
+
+    has_content = False
+
+    def run(self):
+        pngs = sorted(GALLERY.glob("*.png"))
+        if not pngs:
+            return [nodes.paragraph(text="No pictures in docs/gallery yet: run "
+                                         "python examples/make_gallery.py.")]
+        captions = readme_captions(ROOT / "README.md")
+        here = Path(self.env.doc2path(self.env.docname)).parent
+        lines = []
+        for png in pngs:
+            rel = Path(png).relative_to(here) if png.is_relative_to(here) else png
+            caption = captions.get(png.name) or png.stem.replace("_", " ")
+            lines += [f".. figure:: {rel.as_posix()}", "   :width: 100%",
+                      f"   :alt: {caption}", "", f"   {caption} (``{png.name}``)", ""]
+        container = nodes.container()
+        self.state.nested_parse(StringList(lines, source="gallery"), self.content_offset, container)
+        return container.children
+
+
+
+
+# ---- cross-references ----------------------------------------------------------------------
+def _import(name: str):
+    """The Python object called ``name`` (dotted), or raise ImportError/AttributeError."""
+    import importlib
+
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            obj = getattr(obj, attr)
+        return obj
+    raise ImportError(name)
+
+
+def resolve_short_names(app, env, node, contnode):
+    """Resolve a Python reference that Sphinx could not.
+
+    1. A name whose last components match exactly one documented object links to it
+       (``graph_extrema`` -> ``spectral_igl.applications.graph_extrema``).
+    2. A name of an existing object links to where that object is documented under
+       another name (``spectral_igl.laplacian`` -> ``spectral_igl.laplacian.laplacian``);
+       if it is not documented (a module constant, a private helper) it is shown as code,
+       without a link.
+    Anything else stays unresolved, and the nitpicky build reports it: a stale or misspelt
+    name in a docstring fails the documentation build.
+    """
+    if node.get("refdomain") != "py":
+        return None
+    target = node["reftarget"].lstrip("~.")
+    domain = env.get_domain("py")
+    matches = [(name, obj) for name, obj in domain.objects.items()
+               if (name == target or name.endswith("." + target)) and not obj.aliased]
+    if len(matches) == 1:
+        from sphinx.util.nodes import make_refnode
+
+        name, obj = matches[0]
+        return make_refnode(app.builder, node["refdoc"], obj.docname, obj.node_id, contnode, name)
+    context = [node.get("py:module"), node.get("py:class"), "spectral_igl", None]
+    m = re.search(r"docstring of ([\w.]+)", node.source or "")
+    if m:    # the modules around the docstring's own object, innermost first
+        parts = m.group(1).split(".")
+        context += [".".join(parts[:i]) for i in range(len(parts) - 1, 0, -1)]
+    for prefix in context:
+        full = f"{prefix}.{target}" if prefix else target
+        try:
+            obj = _import(full)
+        except (ImportError, AttributeError):
+            continue
+        for name, entry in domain.objects.items():    # documented under another name?
+            try:
+                same = not entry.aliased and _import(name) is obj
+            except (ImportError, AttributeError):
+                same = False
+            if same:
+                from sphinx.util.nodes import make_refnode
+
+                return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id,
+                                    contnode, name)
+        return contnode
+    return None
+
+
+def setup(app):
+    app.add_directive("gallery", Gallery)
+    app.connect("missing-reference", resolve_short_names)
+    return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -1,0 +1,114 @@
+r"""A heat operator that keeps positive inputs positive, to full relative accuracy.
+
+Entropic transport and Varadhan's formula need :math:`\log K_t`, i.e. the heat kernel to a
+*relative* accuracy where it is :math:`e^{-d^2/4t}` small. The engine's rational
+approximations bound the absolute error, so far from the source their kernel is noise of
+either sign. Backward-Euler steps with a Metzler operator do not have that limit:
+
+.. math:: P = (M + sL)^{-1} M, \qquad K_t \approx P^N, \quad s = t/N,
+
+with :math:`M` the lumped mass and :math:`L` a stiffness whose off-diagonal entries are
+all :math:`\le 0`. Then :math:`M + sL` is a symmetric M-matrix: its Cholesky factor has
+non-positive off-diagonal entries, so both triangular solves of a non-negative right-hand
+side only add non-negative terms. No cancellation occurs, every entry of the result is
+positive and accurate to a few units of round-off relative to itself, however small
+(until it underflows below :math:`10^{-308}`).
+"""
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import scipy.sparse as sp
+
+from .._validate import as_positive, describe
+from ..laplacian import Laplacian
+from ..linalg import factorize
+
+__all__ = ["PositiveHeat", "metzler_stiffness"]
+
+
+def metzler_stiffness(L) -> sp.csr_matrix:
+    r"""The stiffness with its positive off-diagonal entries removed (rows still sum to 0).
+
+    .. math:: \hat L_{ij} = \min(L_{ij}, 0)\ (i \ne j), \qquad \hat L_{ii} = -\sum_{j\ne i}\hat L_{ij}
+
+    Parameters
+    ----------
+    L : (n, n) sparse, symmetric
+
+    Returns
+    -------
+    (n, n) sparse csr, symmetric, positive semi-definite, with non-positive off-diagonals.
+    """
+    C = sp.coo_matrix(L)
+    keep = (C.row != C.col) & (C.data < 0)
+    n = C.shape[0]
+    W = sp.csr_matrix((C.data[keep], (C.row[keep], C.col[keep])), shape=(n, n))
+    return (W - sp.diags(np.asarray(W.sum(axis=1)).ravel())).tocsr()
+
+
+class PositiveHeat:
+    r"""Heat diffusion :math:`u \mapsto P^N u`, :math:`P = (M + \tfrac{t}{N} L)^{-1}M`, positive.
+
+    Parameters
+    ----------
+    lap : Laplacian
+        For a triangle mesh (``V`` and ``F`` in ``lap.data``) the stiffness is built on
+        the intrinsic Delaunay triangulation (all interior cotangent weights
+        :math:`\ge 0`); any remaining positive off-diagonal entry (a boundary edge opposite
+        an obtuse angle, or any entry of another domain's ``lap.L``) is removed by
+        :func:`metzler_stiffness`. The mass is lumped (``lap.mass``, or the intrinsic
+        barycentric areas).
+    t : float
+        Diffusion time, > 0.
+    steps : int, default 16
+        Backward-Euler steps :math:`N`. The kernel of :math:`P^N` is the heat kernel's
+        Gaussian :math:`e^{-d^2/4t}` for :math:`d^2/4t \ll N` (the exponent's relative
+        error is about :math:`d^2/(8Nt)`) and decays only like :math:`e^{-d\sqrt{N/t}}`
+        beyond; each application costs :math:`N` pairs of triangular solves with one
+        factorization.
+
+    Attributes
+    ----------
+    L : (n, n) sparse
+        The Metzler stiffness used.
+    mass : (n,) float
+        The lumped mass used.
+    """
+
+    def __init__(self, lap: Laplacian, t: float, steps: int = 16):
+        if not isinstance(lap, Laplacian):
+            raise TypeError(f"lap must be a spectral_igl.Laplacian, got {describe(lap)}")
+        if isinstance(steps, bool) or not isinstance(steps, numbers.Integral) or steps < 1:
+            raise ValueError(f"steps must be a positive integer, got {describe(steps)}")
+        self.t = as_positive(t, "t")
+        self.steps = int(steps)
+        self.n = lap.n
+        if lap.domain == "triangle" and "V" in lap.data and "F" in lap.data:
+            from .geodesics import intrinsic_operators
+
+            V = np.asarray(lap.data["V"], dtype=float)
+            V = V if V.shape[1] == 3 else np.c_[V, np.zeros(len(V))]
+            _, _, L, M, _ = intrinsic_operators(V, np.asarray(lap.data["F"]))
+            mass = M.diagonal()
+        else:
+            L, mass = lap.L, np.asarray(lap.mass, dtype=float)
+        self.L = metzler_stiffness(L)
+        self.mass = np.asarray(mass, dtype=float)
+        s = self.t / self.steps
+        self._factor = factorize((sp.diags(self.mass) + s * self.L).tocsr())
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """:math:`P^N X` for X of shape (n,) or (n, k); non-negative in, positive out."""
+        X = np.asarray(X, dtype=float)
+        m = self.mass if X.ndim == 1 else self.mass[:, None]
+        for _ in range(self.steps):
+            X = self._factor.solve(m * X)
+        return X
+
+    def column(self, source: int) -> np.ndarray:
+        r"""(n,) kernel column :math:`K_t(\cdot, p) \approx P^N (e_p / m_p)`."""
+        e = np.zeros(self.n)
+        e[int(source)] = 1.0 / self.mass[int(source)]
+        return self.apply(e)

@@ -1,0 +1,389 @@
+"""Where to look from: a camera that faces the source from outside the shape.
+
+Only numpy (and scipy) at import time; the occlusion test uses VTK's cell locator, imported
+when a camera is placed.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["VIEWS", "parse_view", "auto_view", "up_direction", "visible_fraction", "place_camera"]
+
+#: named views: the direction from the centre of the shape towards the camera
+VIEWS = {
+    "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0),
+    "iso": (1.0, 1.0, 1.0),
+}
+#: the vertical angle of VTK's default perspective camera (degrees)
+VIEW_ANGLE = 30.0
+
+
+def parse_view(view):
+    """Normalise a view request.
+
+    Parameters
+    ----------
+    view : None, str, (3,) float or pyvista camera position
+        ``None`` or ``"auto"``: choose (see :func:`spectral_igl.viz.auto_view`); a name in ``VIEWS``
+        (``"iso"``, ``"+x"``, ``"-z"``, ...); a direction ``(dx, dy, dz)`` (from the shape
+        towards the camera; also as the string ``"1,0.5,0"``); or a full pyvista camera
+        position ``[position, focal_point, view_up]`` or a pyvista name (``"xy"``, ...).
+
+    Returns
+    -------
+    ("auto", None) or ("direction", (3,) float) or ("pyvista", object)
+    """
+    if view is None or (isinstance(view, str) and view.strip().lower() == "auto"):
+        return "auto", None
+    if isinstance(view, str):
+        key = view.strip().lower()
+        if key in VIEWS:
+            d = np.asarray(VIEWS[key], dtype=float)
+            return "direction", d / np.linalg.norm(d)
+        if key in ("x", "y", "z"):
+            return "direction", np.asarray(VIEWS["+" + key], dtype=float)
+        if key in ("xy", "xz", "yz", "yx", "zx", "zy"):
+            return "pyvista", key
+        try:
+            d = np.array([float(s) for s in key.replace(" ", "").split(",")])
+        except ValueError:
+            d = None
+        if d is None or d.shape != (3,):
+            raise ValueError(f"camera/view must be 'auto', one of {', '.join(VIEWS)}, or a direction "
+                             f"'dx,dy,dz'; got {view!r}")
+    else:
+        try:
+            d = np.asarray(view, dtype=float)
+        except (TypeError, ValueError):
+            return "pyvista", view
+        if d.shape == (3, 3):
+            return "pyvista", [tuple(r) for r in d]
+        if d.shape != (3,):
+            raise ValueError(f"camera/view direction must have 3 components, got shape {d.shape}")
+    if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
+        raise ValueError(f"camera/view direction must be finite and non-zero, got {view!r}")
+    return "direction", d / np.linalg.norm(d)
+
+
+def _unit(x):
+    x = np.asarray(x, dtype=float)
+    n = np.linalg.norm(x)
+    return x / n if n > 0 else x
+
+
+def up_direction(points, direction):
+    """An up vector from the shape itself, orthogonal to the view ``direction``.
+
+    The principal axes of ``points`` are the candidates. Those at least ~37 degrees from the
+    view are upright enough once projected; among them the one closest to the file's own
+    ``y`` (then ``z``) axis wins, which keeps an upright scan upright, then the one most
+    orthogonal to the view. Without such an axis, the most orthogonal one. Its sign points along the coordinate axis it is closest to.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    direction : (3,) float
+
+    Returns
+    -------
+    (3,) float, a unit vector orthogonal to ``direction``.
+    """
+    P = np.asarray(points, dtype=float)
+    d = _unit(direction)
+    if len(P) >= 3:
+        C = np.cov((P - P.mean(0)).T)
+        _, axes = np.linalg.eigh(C)
+        axes = axes.T[::-1]  # largest variance first
+    else:
+        axes = np.eye(3)
+    # any axis at least ~37 degrees away from the view is upright enough once projected;
+    # among those, the file's own vertical (y, then z) decides, then orthogonality
+    score = [(0.6 * abs(a[1]) + 0.4 * abs(a[2]) + 0.3 * (1.0 - abs(a @ d)))
+             if abs(a @ d) < 0.8 else -1.0 + (1.0 - abs(a @ d)) for a in axes]
+    a = axes[int(np.argmax(score))]
+    a = a * (1.0 if a[int(np.argmax(np.abs(a)))] >= 0 else -1.0)
+    up = a - (a @ d) * d
+    if np.linalg.norm(up) < 1e-6:  # view along the axis: any orthogonal vector
+        up = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
+    return _unit(up)
+
+
+class _Occluder:
+    """Segment/surface intersection test on a triangle surface (VTK static cell locator)."""
+
+    def __init__(self, surface):
+        from vtkmodules.vtkCommonDataModel import vtkStaticCellLocator
+
+        self.surface = surface
+        self.locator = vtkStaticCellLocator()
+        self.locator.SetDataSet(surface)
+        self.locator.BuildLocator()
+
+    def blocked(self, a, b) -> bool:
+        from vtkmodules.vtkCommonCore import vtkPoints
+        from vtkmodules.vtkCommonCore import vtkIdList
+
+        pts, ids = vtkPoints(), vtkIdList()
+        self.locator.IntersectWithLine(tuple(map(float, a)), tuple(map(float, b)), 0.0, pts, ids)
+        return ids.GetNumberOfIds() > 0
+
+
+def camera_distance(radius, view_angle=VIEW_ANGLE):
+    """Distance from the focal point at which VTK's ``reset_camera`` fits a sphere of ``radius``."""
+    return float(radius) / np.sin(np.radians(view_angle) / 2.0)
+
+
+def visible_fraction(occluder, targets, focal, radius, direction, eps):
+    """Fraction of ``targets`` (k, 3) seen unobstructed from the camera placed along ``direction``."""
+    eye = np.asarray(focal) + camera_distance(radius) * _unit(direction)
+    seen = 0
+    for q in np.atleast_2d(targets):
+        to_eye = eye - q
+        dist = np.linalg.norm(to_eye)
+        if dist <= eps:
+            seen += 1
+            continue
+        start = q + eps * to_eye / dist  # leave the surface the point lies on
+        seen += not occluder.blocked(start, eye)
+    return seen / max(len(np.atleast_2d(targets)), 1)
+
+
+def _surface_arrays(surface):
+    P = np.asarray(surface.points, dtype=float)
+    faces = np.asarray(surface.faces).reshape(-1, 4)
+    return P, faces[:, 1:].astype(np.int64)
+
+
+def _has_faces(surface):
+    faces = getattr(surface, "faces", None)
+    return faces is not None and np.asarray(faces).size > 0
+
+
+def _outward_normal(P, F, target, radius):
+    """Area-weighted normal of the triangles within ``radius`` of ``target``, pointing outwards.
+
+    Outwards: the triangles' orientation is trusted when the surface encloses a positive
+    volume; when it encloses a negative one (inward-facing triangles) the normal is flipped.
+    """
+    A, B, Cc = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
+    N = np.cross(B - A, Cc - A)  # twice the area times the unit normal
+    cent = (A + B + Cc) / 3.0
+    near = np.linalg.norm(cent - target, axis=1) <= radius
+    if not near.any():
+        near = np.argsort(np.linalg.norm(cent - target, axis=1))[:6]
+    n = N[near].sum(axis=0)
+    volume = np.einsum("ij,ij->", A, np.cross(B, Cc)) / 6.0
+    if volume < 0:
+        n = -n
+    return _unit(n)
+
+
+def _rotations(n, angles):
+    """Directions at ``angles`` (radians) from ``n``, in four azimuths each."""
+    n = _unit(n)
+    u = _unit(np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]))
+    v = np.cross(n, u)
+    out = []
+    for a in angles:
+        for w in (u, v, -u, -v):
+            out.append(_unit(np.cos(a) * n + np.sin(a) * w))
+    return out
+
+
+def auto_view(surface, target, *, neighbours=None):
+    """A view direction from outside the shape that sees the point ``target``.
+
+    Candidates, in order of preference: the outward normal at the target averaged over a
+    neighbourhood (5% of the diagonal), its blend with the direction from the centre, the
+    direction from the centre, the normal tilted by 25 and 50 degrees, the six axis
+    directions and the eight diagonals. Each candidate is scored by the fraction of the
+    target's neighbourhood that a ray test shows unobstructed from the camera that
+    ``reset_camera`` would place along it (the target itself weighing half); the first
+    candidate with the best score wins.
+
+    Parameters
+    ----------
+    surface : pyvista.PolyData
+        The triangles drawn (the boundary of a volume).
+    target : (3,) float or (k, 3) float
+        The point to show (the source, or the minimum of the quantity drawn); with several
+        points, the candidate view that sees most of them (facing them best) wins.
+    neighbours : (k, 3) float, optional
+        Points around the target that should be visible too; default the surface vertices
+        within 3% of the diagonal (at most 12 of them).
+
+    Returns
+    -------
+    direction : (3,) float
+        Unit vector from the focal point towards the camera.
+    visible : float
+        Visibility score: 1/2 if the target is unobstructed, plus 1/2 times the fraction of
+        its neighbours that are (1.0: everything seen).
+    """
+    if not surface.is_all_triangles:
+        surface = surface.triangulate()
+    P, F = _surface_arrays(surface)
+    target = np.asarray(target, dtype=float)
+    if target.ndim == 2 and len(target) > 1:  # several features: all of them in view
+        return _auto_view_many(surface, P, F, target)
+    target = target.reshape(3)
+    lo, hi = P.min(0), P.max(0)
+    focal = (lo + hi) / 2.0
+    diag = float(np.linalg.norm(hi - lo)) or 1.0
+    radius = diag / 2.0
+    if len(F) == 0:
+        return _unit(target - focal) if np.linalg.norm(target - focal) > 0 else _unit(VIEWS["iso"]), 1.0
+    n = _outward_normal(P, F, target, 0.05 * diag)
+    if neighbours is None:  # nearby vertices on the same side (not the back of a thin part)
+        dist = np.linalg.norm(P - target, axis=1)
+        close = np.argsort(dist)[:25]
+        close = close[dist[close] <= 0.03 * diag]
+        if close.size and np.linalg.norm(n) > 0:
+            N = np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])
+            vn = np.zeros_like(P)
+            for c in range(3):
+                np.add.at(vn, F[:, c], N)
+            sign = 1.0 if np.einsum("ij,ij->", P[F[:, 0]], np.cross(P[F[:, 1]], P[F[:, 2]])) >= 0 else -1.0
+            close = close[sign * (vn[close] @ n) > 0][:12]
+        neighbours = P[close]
+    targets = np.vstack([target[None, :], np.asarray(neighbours, dtype=float).reshape(-1, 3)])
+    out = target - focal
+    cands = []
+    if np.linalg.norm(n) > 0:
+        cands.append(n)
+        if np.linalg.norm(out) > 1e-9 * diag:
+            cands.append(_unit(n + _unit(out)))
+    if np.linalg.norm(out) > 1e-9 * diag:
+        cands.append(_unit(out))
+    if np.linalg.norm(n) > 0:
+        cands += _rotations(n, np.radians([25.0, 50.0]))
+    cands += [_unit(VIEWS[k]) for k in ("+x", "-x", "+y", "-y", "+z", "-z")]
+    cands += [_unit(np.array([sx, sy, sz], dtype=float)) for sx in (1, -1) for sy in (1, -1)
+              for sz in (1, -1)]
+    occ = _Occluder(surface)
+    eps = 1e-3 * diag
+    best, best_score = cands[0], -1.0
+    for d in cands:
+        # the target itself counts as much as all its neighbours together
+        s = 0.5 * visible_fraction(occ, targets[:1], focal, radius, d, eps)
+        s += 0.5 * (visible_fraction(occ, targets[1:], focal, radius, d, eps) if len(targets) > 1
+                    else 2.0 * s)
+        # the point must also face the camera, not be seen edge-on through the rim
+        if n is not None and np.linalg.norm(n) > 0 and d @ n < 0.05:
+            s *= 0.5
+        if s > best_score + 1e-9:
+            best, best_score = d, s
+        if best_score >= 1.0:
+            break
+    return best, best_score
+
+
+def _auto_view_many(surface, P, F, targets):
+    """The candidate view that sees most of ``targets`` (k, 3), starting from their mean normal."""
+    lo, hi = P.min(0), P.max(0)
+    focal = (lo + hi) / 2.0
+    diag = float(np.linalg.norm(hi - lo)) or 1.0
+    normals = [_outward_normal(P, F, q, 0.05 * diag) for q in targets]
+    n = _unit(np.sum(normals, axis=0))
+    cands = ([n] if np.linalg.norm(n) > 0 else []) + [_unit(q - focal) for q in targets]
+    if np.linalg.norm(n) > 0:
+        cands += _rotations(n, np.radians([25.0, 50.0, 75.0]))
+    span = targets.max(axis=0) - targets.min(axis=0)
+    if np.linalg.norm(span) > 0:  # side views of the line between the features
+        axis = _unit(targets[-1] - targets[0])
+        cands += _rotations(axis, [np.pi / 2.0])
+    cands += [_unit(VIEWS[k]) for k in ("+x", "-x", "+y", "-y", "+z", "-z")]
+    cands += [_unit(np.array([sx, sy, sz], dtype=float)) for sx in (1, -1) for sy in (1, -1)
+              for sz in (1, -1)]
+    occ = _Occluder(surface)
+    best, best_score = cands[0], -1.0
+    for d in cands:
+        s = visible_fraction(occ, targets, focal, diag / 2.0, d, 1e-3 * diag)
+        # a point seen edge-on hardly shows: prefer views that face every target; the worst
+        # facing counts, so that two opposite features are seen from the side (with the
+        # transition between them) rather than one of them alone
+        s += 0.6 * float(min(d @ m for m in normals))
+        if s > best_score + 1e-9:
+            best, best_score = d, s
+    return best, float(np.clip(best_score, 0.0, 1.0))
+
+
+def place_camera(plotter, surface, camera="auto", target=None):
+    """Point ``plotter``'s camera at ``surface``.
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter
+    surface : pyvista.PolyData
+        What is drawn (triangles; a point set is looked at from its centre).
+    camera : see :func:`spectral_igl.viz.parse_view`
+    target : (3,) float, optional
+        The point to face with ``camera="auto"`` (the source or the feature drawn); without
+        it ``"auto"`` is the ``"iso"`` view with the shape's own up direction.
+
+    Returns
+    -------
+    dict
+        ``direction`` and ``up`` (unit vectors), ``visible`` (fraction of the target's
+        neighbourhood seen; ``None`` when not tested).
+    """
+    mode, value = parse_view(camera)
+    if mode == "pyvista":
+        plotter.camera_position = value
+        plotter.reset_camera()
+        return {"direction": None, "up": None, "visible": None}
+    P = np.asarray(surface.points, dtype=float)
+    lo, hi = P.min(0), P.max(0)
+    focal = (lo + hi) / 2.0
+    visible = None
+    if mode == "direction":
+        d = value
+    elif target is None:
+        d = _unit(VIEWS["iso"])
+    elif not _has_faces(surface):
+        out = np.mean(np.atleast_2d(np.asarray(target, dtype=float)), axis=0) - focal
+        d = _unit(out) if np.linalg.norm(out) > 0 else _unit(VIEWS["iso"])
+        d = _unit(d + 0.3 * _unit(VIEWS["iso"]))
+    else:
+        d, visible = auto_view(surface, target)
+    used = P
+    if _has_faces(surface):
+        tri = surface if surface.is_all_triangles else surface.triangulate()
+        used = np.asarray(tri.points)[np.unique(_surface_arrays(tri)[1])]
+    up = up_direction(used, d)
+    dist = camera_distance(max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-12))
+    plotter.camera_position = [tuple(focal + dist * d), tuple(focal), tuple(up)]
+    plotter.reset_camera()
+    return {"direction": d, "up": up, "visible": visible, "points": used}
+
+
+def fit_view(plotter, points, height=0.8, width=0.92, lift=0.0):
+    """Narrow the camera's view angle until ``points`` fill ``height`` x ``width`` of the picture.
+
+    The camera keeps its position and direction; the focal point moves sideways so that the
+    points are centred (``lift``: fraction of the picture height to move them up, to leave
+    room for a colour bar at the bottom).
+    """
+    cam = plotter.camera
+    eye = np.asarray(cam.position, dtype=float)
+    focal = np.asarray(cam.focal_point, dtype=float)
+    fwd = _unit(focal - eye)
+    up = _unit(np.asarray(cam.up, dtype=float) - (np.asarray(cam.up, dtype=float) @ fwd) * fwd)
+    right = np.cross(fwd, up)
+    Q = np.asarray(points, dtype=float) - eye
+    depth = Q @ fwd
+    if len(Q) == 0 or np.any(depth <= 0):
+        return
+    x, y = (Q @ right) / depth, (Q @ up) / depth  # tangents of the angles to the axis
+    cx, cy = (x.max() + x.min()) / 2.0, (y.max() + y.min()) / 2.0
+    w, h = plotter.window_size
+    aspect = w / max(h, 1)
+    half = max((y.max() - y.min()) / 2.0 / height, (x.max() - x.min()) / 2.0 / width / aspect, 1e-9)
+    dist = float(np.linalg.norm(focal - eye))
+    cy -= lift * 2.0 * half
+    new_focal = eye + dist * _unit(fwd + cx * right + cy * up)
+    cam.focal_point = tuple(new_focal)
+    cam.up = tuple(up)
+    cam.view_angle = float(np.degrees(2.0 * np.arctan(half)))
