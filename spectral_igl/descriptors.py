@@ -79,7 +79,10 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     for t in Tv:
         as_positive(t, "time")
     if _family(lap, method, Tv.size, kwargs):
-        return heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
+        with progress_bar(T.size, "hks", progress, unit="time") as bar:
+            out = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
+            bar.update(T.size)
+        return out
     cols = []
     with progress_bar(T.size, "hks", progress, unit="time") as bar:
         for t in Tv:

@@ -155,10 +155,13 @@ MANY_SOURCES = 8
 
 def block_sources(lap, method, delta, m) -> bool:
     """Whether m heat columns go through one factorization per pole with all sources as one
-    block (cheaper than m Krylov runs from m sources on)."""
+    block: from :data:`MANY_SOURCES` sources on, above the dense limit (where factorizations,
+    not solves, dominate the cost of the Krylov path)."""
+    from .diagonal import EXACT_MAX
     from .linalg import ldlt
 
-    return method == "auto" and delta == "mass" and m >= MANY_SOURCES and ldlt.available()
+    return (method == "auto" and delta == "mass" and m >= MANY_SOURCES and lap.n > EXACT_MAX
+            and ldlt.available())
 
 
 def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False):

@@ -120,3 +120,19 @@ def test_budget_bounds_the_cached_factorizations(sphere):
         sig.linalg.shifted_factor(lap, beta)
     assert lap.cache.slot_nbytes("factor") <= 1.5 * one.nbytes
     assert len(lap.cache.keys("factor")) == 1
+
+
+def test_many_sources_take_the_block_path_above_the_dense_limit():
+    from _spectral_truth import torus
+
+    lap = sig.laplacian(*torus(80, 50))            # 4,000 vertices > EXACT_MAX
+    src = np.arange(0, 4000, 400)                   # 10 sources
+    assert sig.kernels.block_sources(lap, "auto", "mass", src.size)
+    K = sig.heat_kernel(lap, 1e-2, src)             # one factorization per pole, one block
+    k0 = sig.heat_kernel(lap, 1e-2, int(src[3]))    # one source: the Krylov path
+    e = K[:, 3] - k0
+    minv_norm = np.sqrt(sig.diagonal.inverse_mass_diagonal(lap)[src[3]])
+    assert np.sqrt(e @ (lap.B @ e)) <= 2e-8 * minv_norm       # both within tol of the truth
+    D = sig.pairwise_spectral_distance(lap, heat(5e-3), src)
+    d = sig.diffusion_distance(lap, 1e-2, int(src[0]), src)
+    np.testing.assert_allclose(D[0], d, rtol=1e-6, atol=1e-8 * d.max())
