@@ -96,3 +96,8 @@ __all__ = [
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger", "mean_curvature_flow",
 ]
+
+# --- collection ---
+from . import collection  # noqa: E402  (dask and zarr are imported only when it runs)
+
+__all__ += ["collection"]

@@ -244,6 +244,7 @@ def build_parser():
     p.add_argument("--mesh", help="run the scripts on this mesh instead of generated shapes")
     p.add_argument("-q", "--quiet", action="store_true")
     _progress_arg(p)
+    _batch_arguments(sub)
     return parser
 
 
@@ -575,6 +576,105 @@ def _job_figures(args):
 _JOBS = {"kernel": _job_kernel_distance, "distance": _job_kernel_distance, "hks": _job_hks,
          "smooth": _job_smooth, "geodesic": _job_geodesic, "view": _job_view,
          "figures": _job_figures}
+
+
+# ---- batch: many shapes on dask.distributed ---------------------------------------------
+def _batch_arguments(sub):
+    p = sub.add_parser("batch", help="run one job over many shapes (dask.distributed, Zarr store)",
+                       description="Run one job over many shapes on dask.distributed and write "
+                                   "one Zarr group per shape to STORE. A rerun skips shapes whose "
+                                   "result is current; a failing shape is recorded and the others "
+                                   "go on. Exit 1 if any shape failed.")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="mesh files, globs (quote them: 'scans/*.ply') or directories")
+    p.add_argument("--job", dest="batch_job", required=True,
+                   choices=("hks", "wks", "diagonal", "distance", "eigenvalues"),
+                   help="hks (--times), wks (--energies), kernel diagonal (--filter, -t), "
+                        "one-to-all distance (--sources, --filter, -t), eigenvalues (-k)")
+    p.add_argument("-o", "--out", required=True, metavar="STORE", help="Zarr store (a directory)")
+    p.add_argument("--times", type=_positive, nargs="+", help="hks: times t")
+    p.add_argument("--energies", type=float, nargs="+", help="wks: log-energies")
+    p.add_argument("--sigma", type=_positive, default=None, help="wks: band width")
+    p.add_argument("-f", "--filter", default=None, metavar="FILTER",
+                   choices=_FILTERS, help=f"diagonal, distance: {', '.join(_FILTERS)} "
+                                          "(default heat for diagonal, biharmonic for distance)")
+    p.add_argument("-t", "--time", type=_positive, default=None, help="time t of the filter")
+    p.add_argument("--order", type=_positive_int, default=3, help="polyharmonic order (default 3)")
+    p.add_argument("-s", "--sources", type=_nonnegative_int, nargs="+", help="distance: source vertices")
+    p.add_argument("-k", type=_positive_int, default=None,
+                   help="eigenvalues: how many (default 20); wks: eigenpairs (default 100)")
+    p.add_argument("--method", default="auto", help="diagonal method (default auto; wks: eigen)")
+    p.add_argument("--tol", type=_positive, default=1e-8)
+    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"))
+    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"))
+    p.add_argument("--workers", type=_positive_int, default=None,
+                   help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run on this dask scheduler (tcp://host:8786) instead of a local cluster")
+    p.add_argument("--memory-limit", default="auto",
+                   help="per-worker memory limit of the local cluster (default auto)")
+    p.add_argument("--retries", type=int, default=2, help="retries after a worker died (default 2)")
+    p.add_argument("--force", action="store_true", help="recompute shapes with a current result")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="rerun shapes whose input made them fail before (default: report them again)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, summary only")
+
+
+def _batch_job(args):
+    from .collection import Job
+
+    kind = args.batch_job
+    if kind == "hks":
+        if not args.times:
+            raise CLIError("--job hks needs --times", EXIT_USAGE)
+        return Job.hks(args.times, method=args.method, tol=args.tol)
+    if kind == "wks":
+        if not args.energies:
+            raise CLIError("--job wks needs --energies", EXIT_USAGE)
+        return Job.wks(args.energies, sigma=args.sigma, k=args.k or 100,
+                       method="eigen" if args.method == "auto" else args.method)
+    if kind == "eigenvalues":
+        return Job.eigenvalues(args.k or 20)
+    filt = args.filter or ("heat" if kind == "diagonal" else "biharmonic")
+    order = args.order if filt == "polyharmonic" else None
+    timed = FILTERS[filt][1]
+    t = args.time if timed else None
+    if timed and t is None:
+        raise CLIError(f"filter {filt} needs a time: give -t", EXIT_USAGE)
+    if kind == "diagonal":
+        return Job.kernel_diagonal(filt, t=t, order=order, method=args.method, tol=args.tol)
+    if not args.sources:
+        raise CLIError("--job distance needs --sources", EXIT_USAGE)
+    return Job.distances(args.sources, filt, t=t, order=order, method=args.method, tol=args.tol)
+
+
+def _job_batch(args):
+    try:
+        from .collection import run
+    except ImportError as err:
+        raise ImportError(f"{err}; batch needs dask[distributed] and zarr") from err
+    try:
+        job = _batch_job(args)
+    except ValueError as err:
+        raise CLIError(str(err), EXIT_USAGE) from err
+    try:
+        from .collection import collect_inputs
+
+        collect_inputs(list(args.inputs))
+    except (ValueError, TypeError) as err:
+        raise CLIError(str(err), EXIT_INPUT) from err
+    summary = run(list(args.inputs), job, args.out, workers=args.workers, scheduler=args.scheduler,
+                  progress=not args.quiet, retries=args.retries, memory_limit=args.memory_limit,
+                  weights=args.weights, mass=args.mass, force=args.force,
+                  retry_failed=args.retry_failed)
+    print(f"done {len(summary.done)}, skipped {len(summary.skipped)}, failed {len(summary.failed)} "
+          f"({summary.seconds:.1f} s, {summary.workers} workers); store {summary.out}")
+    for name, err in sorted(summary.failed.items()):
+        print(f"failed: {name}: {err}", file=sys.stderr)
+    return EXIT_OK if summary.ok else EXIT_ERROR
+
+
+_JOBS["batch"] = _job_batch
 
 
 def main(argv=None) -> int:

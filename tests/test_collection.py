@@ -1,0 +1,347 @@
+"""Shape collections on dask.distributed: results equal the single-process functions, failures
+are recorded without stopping the others, reruns skip, interrupted runs resume, and a worker
+that dies during a task is replaced and the task retried."""
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("zarr", minversion="3")
+
+import cloudpickle  # noqa: E402  (a dependency of distributed)
+
+import spectral_igl as sig  # noqa: E402
+from data_generators import box_tets, icosphere, torus  # noqa: E402
+from spectral_igl import collection  # noqa: E402
+from spectral_igl.collection import Job  # noqa: E402
+from spectral_igl.io import read_mesh, write_mesh  # noqa: E402
+
+from conftest import MESH_DIR  # noqa: E402
+
+# user functions of this module travel to the workers by value (workers cannot import tests/)
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+REL = 1e-12
+
+
+@pytest.fixture(scope="module")
+def client():
+    """A LocalCluster of two single-threaded worker processes; a dying worker is retried once."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        c = Client(cluster)
+        try:
+            yield c
+        finally:
+            c.close()
+            cluster.close()
+
+
+def _close(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape
+    scale = max(np.max(np.abs(b)), np.finfo(float).tiny)
+    return np.max(np.abs(a - b)) <= REL * scale
+
+
+def _shapes():
+    V, F = icosphere(2)                       # 162 vertices, unit sphere
+    Vt, Ft = torus(1.0, 0.4, 24, 12)
+    Vb, T = box_tets((5, 4, 3))               # tetrahedra
+    P = icosphere(3)[0]                       # a point set (642 points)
+    return {"sphere": (V, F), "torus": (Vt, Ft), "box": (Vb, T), "points": (P, None)}
+
+
+def _lap(V, C):
+    return sig.point_cloud_laplacian(V) if C is None else sig.laplacian(V, C)
+
+
+def test_results_equal_single_process(client, tmp_path):
+    shapes = _shapes()
+    times = [1e-2, 1e-1]
+    out = tmp_path / "hks.zarr"
+    s = collection.run(shapes, Job.hks(times), out, scheduler=client, progress=False)
+    assert sorted(s.done) == sorted(shapes) and not s.failed and not s.skipped
+    results, failures = collection.load(out)
+    assert failures == [] and sorted(results) == sorted(shapes)
+    for name, (V, C) in shapes.items():
+        lap = _lap(V, C)
+        H = results[name]["hks"]
+        assert H.shape == (lap.n, 2)
+        assert _close(H, sig.hks(lap, times)), name
+        meta = results[name].meta
+        assert meta["n"] == lap.n and meta["version"] == sig.__version__
+        assert meta["params"]["times"] == times and meta["timings"]["compute"] > 0
+        assert len(meta["mesh_hash"]) == 64 and len(meta["input_hash"]) == 64
+    # the stored bounds are honest against the dense ground truth of the small sphere
+    lap = _lap(*shapes["sphere"])
+    lam, X = sig.dense_eigs(lap)
+    bounds = results["sphere"].meta["bounds"]["abs_error_bound"]
+    for j, t in enumerate(times):
+        exact = (X ** 2) @ np.exp(-t * lam)
+        err = np.max(np.abs(results["sphere"]["hks"][:, j] - exact))
+        assert 0 < bounds[j] and err <= bounds[j]
+
+    # one-to-all distances from two sources, eigenvalues, a kernel diagonal, a user function
+    V, F = shapes["torus"]
+    lap = _lap(V, F)
+    two = {"torus": (V, F), "sphere": shapes["sphere"]}
+    out2 = tmp_path / "dist.zarr"
+    collection.run(two, Job.distances([0, 7], "biharmonic"), out2, scheduler=client, progress=False)
+    D = collection.load(out2).results["torus"]
+    assert D["distances"].shape == (2, lap.n) and list(D["sources"]) == [0, 7]
+    for row, src in zip(D["distances"], [0, 7]):
+        assert _close(row, sig.biharmonic_distance(lap, src))
+    out3 = tmp_path / "eig.zarr"
+    collection.run(two, Job.eigenvalues(9), out3, scheduler=client, progress=False)
+    lam = collection.load(out3).results["sphere"]["eigenvalues"]
+    assert _close(lam, sig.eigs(_lap(*shapes["sphere"]), 9)[0])
+    # and they are the sphere's: 0, then l(l+1) = 2 three times, 6 five times, to O(h^2)
+    assert abs(lam[0]) < 1e-8 and np.allclose(lam[1:4], 2, rtol=0.03) and np.allclose(lam[4:9], 6, rtol=0.05)
+    out4 = tmp_path / "diag.zarr"
+    collection.run(two, Job.kernel_diagonal("heat", t=0.05), out4, scheduler=client, progress=False)
+    assert _close(collection.load(out4).results["torus"]["diagonal"],
+                  sig.kernel_diagonal(lap, sig.filters.heat(0.05)))
+    out5 = tmp_path / "user.zarr"
+    collection.run(two, Job.function(_mass_and_degree, params={"v": 1}), out5, scheduler=client,
+                   progress=False)
+    R = collection.load(out5).results["torus"]
+    assert np.array_equal(R["mass"], lap.mass) and np.array_equal(R["degree"], np.diff(lap.L.indptr))
+
+
+def _mass_and_degree(name, lap):
+    return {"mass": lap.mass, "degree": np.diff(lap.L.indptr)}
+
+
+def test_corrupt_file_among_good_ones(client, tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    V, F = icosphere(2)
+    write_mesh(folder / "good.obj", V, F)
+    write_mesh(folder / "box.mesh", *box_tets((4, 3, 3)))
+    (folder / "garbage.obj").write_text("v 1 2\nf 1 2 9\n")
+    bad = F.copy()
+    bad[0, 0] = 10_000
+    (folder / "badindex.off").write_text(
+        "OFF\n%d %d 0\n" % (len(V), len(F))
+        + "".join("%.17g %.17g %.17g\n" % tuple(v) for v in V) + "".join("3 %d %d %d\n" % tuple(f) for f in bad))
+    out = tmp_path / "store"
+    s = collection.run(str(folder / "*"), Job.hks([0.05]), out, scheduler=client, progress=False)
+    assert sorted(s.done) == ["box", "good"] and sorted(s.failed) == ["badindex", "garbage"]
+    results, failures = collection.load(out)
+    assert sorted(results) == ["box", "good"]
+    errors = {f["name"]: f["error"] for f in failures}
+    assert "not a valid OBJ" in errors["garbage"] and "ValueError" in errors["garbage"]
+    assert "10000" in errors["badindex"]
+    assert all(f["source"].endswith(("garbage.obj", "badindex.off")) for f in failures)
+    assert _close(results["good"]["hks"][:, 0], sig.hks(sig.laplacian(V, F), 0.05))
+    # a rerun recomputes nothing: the good shapes are skipped, the corrupt ones reported again
+    s2 = collection.run(str(folder / "*"), Job.hks([0.05]), out, scheduler=client, progress=False)
+    assert s2.done == [] and sorted(s2.skipped) == ["box", "good"] and sorted(s2.failed) == ["badindex", "garbage"]
+    # repairing a file recomputes that file only
+    write_mesh(folder / "badindex.off", V, F)
+    s3 = collection.run(str(folder / "*"), Job.hks([0.05]), out, scheduler=client, progress=False)
+    assert s3.done == ["badindex"] and sorted(s3.skipped) == ["box", "good"]
+
+
+def test_rerun_skips_and_new_parameters_recompute(client, tmp_path):
+    shapes = _shapes()
+    out = tmp_path / "s.zarr"
+    collection.run(shapes, Job.hks([0.1]), out, scheduler=client, progress=False)
+    stamps = {n: (out / n / "zarr.json").stat().st_mtime_ns for n in shapes}
+    s = collection.run(shapes, Job.hks([0.1]), out, scheduler=client, progress=False)
+    assert s.done == [] and sorted(s.skipped) == sorted(shapes) and s.ok
+    assert stamps == {n: (out / n / "zarr.json").stat().st_mtime_ns for n in shapes}
+    # other parameters, other mass matrix, or a changed input: recomputed
+    s = collection.run(shapes, Job.hks([0.2]), out, scheduler=client, progress=False)
+    assert sorted(s.done) == sorted(shapes)
+    s = collection.run(shapes, Job.hks([0.2]), out, scheduler=client, progress=False, mass="lumped")
+    assert sorted(s.done) == sorted(shapes)
+    moved = dict(shapes, sphere=(shapes["sphere"][0] * 2.0, shapes["sphere"][1]))
+    s = collection.run(moved, Job.hks([0.2]), out, scheduler=client, progress=False, mass="lumped")
+    assert s.done == ["sphere"]
+    H = collection.load(out).results["sphere"]["hks"][:, 0]
+    assert _close(H, sig.hks(sig.laplacian(*moved["sphere"], mass="lumped"), 0.2))
+
+
+_INTERRUPTED = """
+import sys
+import numpy as np
+from data_generators import icosphere
+from spectral_igl import collection
+from spectral_igl.collection import Job
+
+if __name__ == "__main__":
+    V, F = icosphere(3)
+    shapes = {f"s{i:02d}": (V * (1.0 + 0.1 * i), F) for i in range(24)}
+    collection.run(shapes, Job.hks([0.01, 0.1]), sys.argv[1], workers=2, progress=False)
+"""
+
+
+def test_interrupted_run_resumes(client, tmp_path):
+    out = tmp_path / "int.zarr"
+    script = tmp_path / "batch.py"
+    script.write_text(textwrap.dedent(_INTERRUPTED))
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    # the whole process group (client, scheduler and worker processes) is killed part-way
+    proc = subprocess.Popen([sys.executable, str(script), str(out)], env=env,
+                            start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 60
+        while time.time() < deadline and proc.poll() is None:
+            if out.is_dir() and sum((p / "zarr.json").is_file() for p in out.iterdir()
+                                    if not p.name.startswith(".")) >= 3:
+                break
+            time.sleep(0.05)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    first = sorted(collection.load(out, arrays=False).results)
+    assert 3 <= len(first) < 24, first
+    # a write cut short leaves nothing that reads back as a result
+    (out / ".partial" / "s99.x").mkdir(parents=True, exist_ok=True)
+    (out / ".partial" / "s99.x" / "zarr.json").write_text(json.dumps(
+        {"zarr_format": 3, "node_type": "group", "attributes": {"status": "done"}}))
+    (out / "ghost").mkdir()
+    (out / "ghost" / "zarr.json").write_text(json.dumps(
+        {"zarr_format": 3, "node_type": "group", "attributes": {"status": "done", "arrays": ["hks"]}}))
+    assert sorted(collection.load(out).results) == first
+    V, F = icosphere(3)
+    shapes = {f"s{i:02d}": (V * (1.0 + 0.1 * i), F) for i in range(24)}
+    s = collection.run(shapes, Job.hks([0.01, 0.1]), out, scheduler=client, progress=False)
+    assert sorted(s.skipped) == first and sorted(s.done) == sorted(set(shapes) - set(first))
+    assert not (out / ".partial" / "s99.x").exists()
+    results = collection.load(out).results
+    assert sorted(results) == sorted(shapes)
+    for name in ("s00", "s23"):
+        assert _close(results[name]["hks"], sig.hks(sig.laplacian(*shapes[name]), [0.01, 0.1]))
+
+
+def _dies_once(folder):
+    def job(name, lap):
+        marker = Path(folder) / f"{name}.died"
+        if name == "sphere" and not marker.exists():
+            marker.write_text("x")
+            os._exit(1)                      # the worker process dies during the task
+        return sig.eigs(lap, 4)[0]
+    return job
+
+
+def _always_dies(name, lap):
+    os._exit(1)
+
+
+def test_worker_killed_during_task_is_retried(client, tmp_path):
+    shapes = {"sphere": icosphere(2), "torus": torus(1.0, 0.4, 24, 12)}
+    out = tmp_path / "k.zarr"
+    s = collection.run(shapes, Job.function(_dies_once(str(tmp_path))), out, scheduler=client, progress=False)
+    assert (tmp_path / "sphere.died").exists()
+    assert sorted(s.done) == ["sphere", "torus"] and s.ok
+    res = collection.load(out).results
+    assert _close(res["sphere"]["result"], sig.eigs(sig.laplacian(*shapes["sphere"]), 4)[0])
+    # a task that kills every worker it meets is given up and recorded, the others finish
+    client.wait_for_workers(2, timeout=30)
+    s = collection.run({"sphere": shapes["sphere"]}, Job.function(_always_dies), tmp_path / "k2.zarr",
+                       scheduler=client, progress=False, retries=0)
+    assert sorted(s.failed) == ["sphere"] and "KilledWorker" in s.failed["sphere"]
+    failures = collection.load(tmp_path / "k2.zarr").failures
+    assert [f["name"] for f in failures] == ["sphere"] and failures[0]["transient"] is True
+    client.wait_for_workers(2, timeout=30)
+
+
+def test_cli_batch(client, tmp_path, capsys):
+    from spectral_igl.cli import main
+
+    V, F = icosphere(2)
+    write_mesh(tmp_path / "a.obj", V, F)
+    write_mesh(tmp_path / "b.off", V * 2.0, F)
+    out = tmp_path / "cli.zarr"
+    args = ["batch", str(tmp_path / "*.o*"), "--job", "distance", "--sources", "0", "5",
+            "--out", str(out), "--scheduler", client.scheduler_info()["address"], "-q"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "done 2, skipped 0, failed 0" in text
+    d = collection.load(out).results["b"]["distances"]
+    assert _close(d[1], sig.biharmonic_distance(sig.laplacian(V * 2.0, F), 5))
+    assert main(args) == 0 and "done 0, skipped 2, failed 0" in capsys.readouterr().out
+    (tmp_path / "c.obj").write_text("not a mesh\n")
+    assert main(args) == 1
+    captured = capsys.readouterr()
+    assert "skipped 2, failed 1" in captured.out and "failed: c:" in captured.err
+    assert main(["batch", str(tmp_path / "a.obj"), "--job", "hks", "--out", str(out)]) == 2
+    assert main(["batch", str(tmp_path / "nothing*.obj"), "--job", "hks", "--times", "1",
+                 "--out", str(out)]) == 3
+
+
+@pytest.mark.skipif(not MESH_DIR.is_dir(), reason="real meshes live beside the checkout")
+def test_real_meshes_triangles_and_tets(client, tmp_path):
+    paths = [str(MESH_DIR / "spot.obj"), str(MESH_DIR / "bunny.mesh")]
+    out = tmp_path / "real.zarr"
+    s = collection.run(paths, Job.kernel_diagonal("biharmonic"), out, scheduler=client, progress=False)
+    assert sorted(s.done) == ["bunny", "spot"]
+    res = collection.load(out).results
+    for p in paths:
+        V, C = read_mesh(p)
+        expect = sig.kernel_diagonal(sig.laplacian(V, C), sig.filters.biharmonic())
+        assert _close(res[Path(p).stem]["diagonal"], expect)
+    assert res["bunny"].meta["domain"] == "tet"
+
+
+def test_bad_arguments(tmp_path):
+    V, F = icosphere(1)
+    with pytest.raises(ValueError, match="two shapes are named 'x'"):
+        collection.collect_inputs([("x", V, F), ("x", V, F)])
+    with pytest.raises(ValueError, match="matches no file"):
+        collection.collect_inputs(str(tmp_path / "*.obj"))
+    with pytest.raises(ValueError, match="no such file"):
+        collection.collect_inputs(str(tmp_path / "missing.obj"))
+    with pytest.raises(ValueError, match="shape name"):
+        collection.collect_inputs([(".hidden", V, F)])
+    with pytest.raises(TypeError, match="job must be a Job"):
+        collection.run({"x": (V, F)}, "hks", tmp_path / "o")
+    with pytest.raises(ValueError, match="needs a time"):
+        Job.kernel_diagonal("heat")
+    with pytest.raises(ValueError, match="filter must be one of"):
+        Job.distances([0], "gaussian")
+    with pytest.raises(ValueError, match="times"):
+        Job.hks([])
+    with pytest.raises(ValueError, match="k must be"):
+        Job.eigenvalues(0)
+    # the memory model grows with size, and faster for tetrahedra (3-D fill)
+    a = collection.estimate_memory(10_000, 70_000, "triangle")
+    b = collection.estimate_memory(100_000, 700_000, "triangle")
+    c = collection.estimate_memory(10_000, 150_000, "tet")
+    assert a < b and 10 * (a - collection.engine.BASE_BYTES) < b - collection.engine.BASE_BYTES and c > a
+
+
+def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
+    from spectral_igl.collection import engine
+
+    shapes = _shapes()
+    big = shapes["torus"][0].shape[0]
+    real = engine.estimate_memory
+    monkeypatch.setattr(engine, "estimate_memory",
+                        lambda n, nnz, domain="triangle", job=None: 10 ** 15 if n == big else real(n, nnz, domain, job))
+    s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
+    assert sorted(s.done) == sorted(shapes)
+    res = collection.load(tmp_path / "big.zarr").results
+    assert res["torus"].meta.get("run_alone") is True and "run_alone" not in res["sphere"].meta
+    assert res["torus"].meta["memory_estimate_bytes"] == 10 ** 15
+    assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
