@@ -64,7 +64,7 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
-    Several times with ``method="auto"`` or ``"selinv"`` share one set of poles
+    Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices, share one set of poles
     (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
     as one time, each time with its own certified bound (``kernel_diagonal`` options other
     than ``tol`` select the one-time-at-a-time path).
@@ -93,10 +93,14 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
 
 
 def _family(lap, method, count, kwargs) -> bool:
-    """Whether several filters go through the common-pole diagonals."""
-    from .diagonal import selinv_supported
+    """Whether several filters go through the common-pole diagonals: ``"selinv"``, or
+    ``"auto"`` above the dense limit (where factorizations, not the fits, dominate; below it
+    ``"auto"`` keeps the one-filter-at-a-time results)."""
+    from .diagonal import EXACT_MAX, selinv_supported
 
     if count < 2 or method not in ("auto", "selinv") or set(kwargs) - {"tol"}:
+        return False
+    if method == "auto" and lap.n <= EXACT_MAX:
         return False
     return selinv_supported(lap, heat(1.0))
 
