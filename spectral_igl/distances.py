@@ -18,6 +18,7 @@ import numpy as np
 from ._validate import as_delta, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
 from .diagonal import EXACT_MAX, check_diagonal_options, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal.multiscale import heat_columns
 from .filters import (
     biharmonic,
     check_filter,
@@ -27,7 +28,7 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .kernels import kernel_columns
+from .kernels import block_sources, kernel_columns
 from .laplacian import as_laplacian
 from .progress import progress_bar
 
@@ -286,14 +287,18 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
                      f"the kernel columns ({lap.n}, {m}) and the ({m}, {m}) distance matrix of {m} seeds",
                      "use fewer seeds, or OneToAll(lap, filt).distance(seed) one seed at a time")
     block = as_int(block, "block", lo=1)
-    op = spectral_operator(lap, filt, method, tol)
-    blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
-    with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
-        cols = []
-        for blk in blocks:
-            cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
-            bar.update()
-    C = np.concatenate(cols, axis=1)
+    if filt.kind == "heat" and block_sources(lap, method, delta, S.size):
+        # one factorization per pole, every seed in one block right-hand side
+        C = heat_columns(lap, [filt.params["t"]], S, tol=tol)[0][:, :, 0]
+    else:
+        op = spectral_operator(lap, filt, method, tol)
+        blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
+        with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
+            cols = []
+            for blk in blocks:
+                cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
+                bar.update()
+        C = np.concatenate(cols, axis=1)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()

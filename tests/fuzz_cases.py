@@ -315,8 +315,8 @@ def _call(build, name, kwargs):
         from spectral_igl.cli import main
         argv = [str(kw["job"]), str(kw["mesh"]), "--quiet", "--tol", str(kw["tol"]),
                 "--source", str(kw["source"])]
-        if kw.get("out") is not None:
-            argv += ["--out", str(kw["out"]) + ".npy"]
+        if kw.get("out") is not None:    # relative names land in the worker's scratch directory
+            argv += ["--out", os.path.join(build.tmp, str(kw["out"])) + ".npy"]
         if kw.get("time") is not None:
             argv += ["--time", str(kw["time"])]
         import contextlib

@@ -8,8 +8,9 @@ from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive,
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
+from ..laplacian.intrinsic import intrinsic_delaunay
 from ..laplacian.mesh import element_measures
-from ..linalg import factorize
+from ..linalg import factorize, ldlt
 from ..progress import progress_bar
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
@@ -67,7 +68,8 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
     smallest :math:`\delta` that gives each triangle inequality a margin of
     ``mollify`` times the mean edge length, so that needle and degenerate triangles
     get a well-defined geometry. The lengths are then flipped to the intrinsic
-    Delaunay triangulation (libigl), where all cotangent weights are non-negative.
+    Delaunay triangulation (:func:`spectral_igl.laplacian.intrinsic.intrinsic_delaunay`,
+    compiled), where all cotangent weights are non-negative.
 
     Returns
     -------
@@ -92,7 +94,7 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
                            l[:, 0] + l[:, 1] - l[:, 2]], axis=1)
         delta = max(0.0, float(np.max(eps - margin)))
         l = l + delta
-    l, Fi = igl.intrinsic_delaunay_triangulation(np.ascontiguousarray(l), F)[:2]
+    l, Fi = intrinsic_delaunay(l, F)
     G, A = _triangle_gradients(l, Fi, n)
     h = float(l.mean())
     AA = sp.diags(np.r_[A, A])
@@ -203,16 +205,32 @@ class HeatGeodesics:
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
         bar.update()
         bar.set_postfix_str("heat factorization")
+        # Poisson solve: ground one vertex per component (the rhs is consistent)
+        ground = np.unique(lap.components, return_index=True)[1]
+        self._free = np.setdiff1d(np.arange(self.n), ground)
+        if step != "engine" and ldlt.available():
+            # M + tL and the grounded L (its grounded rows and columns replaced by the
+            # identity's) have the pattern of L + M: one ordering and symbolic analysis,
+            # two numeric LDLᵀ factorizations
+            pattern = ldlt.Pattern((abs(Lh) + M).tocsc())
+            self._heat = ldlt.LDLT((M + self.t * Lh).tocsc(), pattern)
+            bar.update()
+            bar.set_postfix_str("Poisson factorization")
+            keep = np.ones(self.n)
+            keep[ground] = 0.0
+            K = sp.diags(keep)
+            Lg = (K @ Lp @ K + sp.diags(1.0 - keep)).tocsc()
+            self._poisson, self._grounded = ldlt.LDLT(Lg, pattern), True
+            bar.update()
+            bar.close()
+            return
         if step == "engine":
             self._op = SpectralOperator(lap, heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
         bar.update()
         bar.set_postfix_str("Poisson factorization")
-        # Poisson solve: ground one vertex per component (the rhs is consistent)
-        ground = np.unique(lap.components, return_index=True)[1]
-        self._free = np.setdiff1d(np.arange(self.n), ground)
-        self._poisson = factorize(sp.csr_matrix(Lp[self._free][:, self._free]))
+        self._poisson, self._grounded = factorize(sp.csr_matrix(Lp[self._free][:, self._free])), False
         bar.update()
         bar.close()
 
@@ -237,7 +255,13 @@ class HeatGeodesics:
         X[ok] = -g[ok] / norm[ok, None]
         div = self.G.T @ (X * self.A[:, None]).T.ravel()
         phi = np.zeros(self.n)
-        phi[self._free] = self._poisson.solve(div[self._free])
+        if self._grounded:
+            fixed = np.setdiff1d(np.arange(self.n), self._free)
+            div[fixed] = 0.0
+            phi = self._poisson.solve(div)
+            phi[fixed] = 0.0
+        else:
+            phi[self._free] = self._poisson.solve(div[self._free])
         comps = self.lap.components
         out = np.full(self.n, np.inf)
         for c in np.unique(comps[src]):
