@@ -11,6 +11,7 @@ eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``diagonal`` (kernel diagonals
 ``quantity`` -> ``viz`` -> ``cli``.
 """
 from . import filters, linalg
+from ._validate import memory_budget, set_memory_budget
 from ._version import __version__
 from .applications import (
                            CriticalPoints,
@@ -74,7 +75,7 @@ from .laplacian import (
 from .linalg import dense_eigs, eigs, lambda_min_positive
 
 __all__ = [
-    "__version__",
+    "__version__", "memory_budget", "set_memory_budget",
     # domains
     "Laplacian", "make_laplacian", "laplacian", "point_cloud_laplacian", "anisotropic_laplacian",
     "voxel_laplacian", "graph_laplacian", "tetrahedralize", "polygon_laplacian", "lambda_max",

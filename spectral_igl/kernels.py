@@ -15,7 +15,7 @@ import numbers
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_positive
+from ._validate import as_delta, as_index, as_indices, as_positive, check_dense_size
 from .approx import spectral_operator
 from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
@@ -42,9 +42,11 @@ def kernel_columns(lap, filt, idx, delta: str = "mass", method: str = "auto", to
 
     With ``return_bound`` also returns the (m,) certified B-norm error bound of each column.
     """
-    op = spectral_operator(lap, filt, method, tol) if op is None else op
     n = lap.n
     idx = np.asarray(idx, dtype=np.int64).reshape(-1)
+    check_dense_size(16.0 * n * idx.size, f"{idx.size} dense kernel columns of length {n}",
+                     "ask for fewer sources at a time, or for distances/diagonals, which need no columns")
+    op = spectral_operator(lap, filt, method, tol) if op is None else op
     dtype = np.complex128 if getattr(filt, "is_complex", False) else np.float64
     out = np.empty((n, idx.size), dtype=dtype)
     bound = np.zeros(idx.size)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_mesh_arrays, as_positive, describe, is_mesh_object
+from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe, is_mesh_object
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
@@ -178,8 +178,9 @@ class HeatGeodesics:
                  mollify: float = 1e-6, progress=None):
         import igl
 
-        if step not in _STEPS:
-            raise ValueError(f"step must be one of {_STEPS}, got {step!r}")
+        if not isinstance(step, str) or step not in _STEPS:
+            raise ValueError(f"step must be one of {_STEPS}, got {describe(step)}")
+        mollify = as_nonnegative(mollify, "mollify")
         lap = _as_laplacian(lap_or_mesh)
         V, C = lap.data["V"], _cells(lap)
         if lap.domain == "tet" and step == "intrinsic_delaunay":
@@ -296,7 +297,13 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     Returns
     -------
     (n,) float
+        ``inf`` exactly on the vertices of connected components that hold no source (e.g.
+        vertices no face references): no path reaches them.
     """
+    if not isinstance(method, str) or method not in ("heat", "varadhan"):
+        raise ValueError(f"method must be 'heat' or 'varadhan', got {describe(method)}")
+    if method == "varadhan" and step != "intrinsic_delaunay":
+        raise ValueError(f"step applies to method='heat' only, got step={step!r} with method='varadhan'")
     if method == "heat":
         return HeatGeodesics(lap_or_mesh, t=t, step=step, progress=progress).compute(source)
     if method == "varadhan":
@@ -316,7 +323,10 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     source : int
         Source vertex.
     t : float, optional
-        Time; default :math:`4h^2`, ``h`` the mean edge length.
+        Time; default the larger of :math:`4h^2` (``h`` the mean edge length) and
+        :math:`(1.5R)^2/80`, ``R`` the largest Euclidean distance from the source within its
+        component (so that :math:`e^{-d^2/4t}` stays above :math:`e^{-20}` out to about 1.5R),
+        doubled (at most 7 times) until the computed kernel is positive on the whole component.
     normalize : bool, default True
         Divide out the leading term of the short-time expansion,
         :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
@@ -375,4 +385,9 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     if normalize:
         logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
     out[comp] = np.sqrt(np.maximum(-4.0 * t * logk, 0.0))
+    lost = comp & ~np.isfinite(out)
+    if lost.any():
+        raise ValueError(f"the heat kernel at t={t:.3g} underflows at {int(lost.sum())} of the "
+                         f"{int(comp.sum())} vertices connected to the source, so Varadhan's formula has "
+                         "no value there; use a larger t or geodesic_distance(..., method='heat')")
     return out
