@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ._check import MAX_COUNT, count, real
 from .surfaces import _grid_faces
 
 __all__ = ["flat_torus", "flat_torus_laplacian", "flat_torus_eigenvalues"]
@@ -30,9 +31,10 @@ def flat_torus(a: float = 1.0, b: float = 1.0, nu: int = 32, nv: int = 32):
     l : (2 nu nv, 3) float
         Edge lengths, ``l[f, c]`` the edge opposite corner ``c`` (libigl's convention).
     """
-    nu, nv = int(nu), int(nv)
-    if nu < 3 or nv < 3:
-        raise ValueError(f"need nu, nv >= 3, got {nu}, {nv}")
+    nu, nv = count(nu, "nu", 3, 10 ** 5), count(nv, "nv", 3, 10 ** 5)
+    a, b = real(a, "a", positive=True), real(b, "b", positive=True)
+    if nu * nv > MAX_COUNT:
+        raise ValueError(f"nu * nv = {nu * nv} is more than {MAX_COUNT} vertices")
     if not (a > 0 and b > 0):
         raise ValueError(f"side lengths must be positive, got a={a}, b={b}")
     F = _grid_faces(nu, nv, wrap_u=True, wrap_v=True)
@@ -74,9 +76,10 @@ def flat_torus_eigenvalues(k: int, a: float = 1.0, b: float = 1.0) -> np.ndarray
     .. math:: \lambda_{ij} = 4\pi^2\left(\frac{i^2}{a^2} + \frac{j^2}{b^2}\right),
               \qquad i, j \in \mathbb{Z}.
     """
-    k = int(k)
-    if k < 0:
-        raise ValueError(f"k must be non-negative, got {k}")
+    k = count(k, "k", 0, 10 ** 6)
+    a, b = real(a, "a", positive=True, limit=1e6), real(b, "b", positive=True, limit=1e6)
+    if max(a, b) / min(a, b) > 1e6:
+        raise ValueError(f"the side ratio a/b = {a / b:g} is beyond 1e6")
     R = 1.0 / min(a, b)
     while True:  # all (i, j) with i²/a² + j²/b² <= R² lie in the box |i| <= R a, |j| <= R b
         i = np.arange(-int(R * a), int(R * a) + 1)[:, None]

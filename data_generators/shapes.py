@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._check import count, real, triple
+
 __all__ = ["icosphere", "sphere_eigenvalues", "box_tets", "box_eigenvalues"]
 
 
@@ -23,9 +25,8 @@ def icosphere(level: int = 3, radius: float = 1.0):
 
     ``n = 10 * 4**level + 2`` vertices. Returns ``(V, F)``, outward-oriented.
     """
-    level = int(level)
-    if not 0 <= level <= 9:
-        raise ValueError(f"level must be in [0, 9], got {level}")
+    level = count(level, "level", 0, 9)
+    radius = real(radius, "radius", positive=True)
     V, F = _icosahedron()
     for _ in range(level):
         E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
@@ -43,6 +44,8 @@ def icosphere(level: int = 3, radius: float = 1.0):
 
 def sphere_eigenvalues(k: int, radius: float = 1.0) -> np.ndarray:
     """First ``k`` Laplace--Beltrami eigenvalues of the sphere: l(l+1)/r², multiplicity 2l+1."""
+    k = count(k, "k")
+    radius = real(radius, "radius", positive=True)
     out, l = [], 0
     while len(out) < k:
         out += [l * (l + 1) / radius ** 2] * (2 * l + 1)
@@ -56,10 +59,8 @@ def box_tets(shape=(8, 6, 4), size=(1.0, 0.75, 0.5)):
     The Kuhn subdivision is conforming across cubes. Returns ``(V, T)`` with positively
     oriented tetrahedra.
     """
-    nx, ny, nz = (int(s) for s in shape)
-    if min(nx, ny, nz) < 1:
-        raise ValueError(f"shape must be three positive integers, got {shape}")
-    a, b, c = (float(s) for s in size)
+    nx, ny, nz = triple(shape, "shape", "count")
+    a, b, c = triple(size, "size", "length")
     x, y, z = np.meshgrid(np.linspace(0, a, nx + 1), np.linspace(0, b, ny + 1),
                           np.linspace(0, c, nz + 1), indexing="ij")
     V = np.c_[x.ravel(), y.ravel(), z.ravel()]
@@ -86,7 +87,8 @@ def box_tets(shape=(8, 6, 4), size=(1.0, 0.75, 0.5)):
 
 def box_eigenvalues(k: int, size=(1.0, 0.75, 0.5)) -> np.ndarray:
     """First ``k`` Neumann eigenvalues of the box: π²(i²/a² + j²/b² + l²/c²), i, j, l >= 0."""
-    a, b, c = (float(s) for s in size)
+    k = count(k, "k")
+    a, b, c = triple(size, "size", "length")
     m = int(np.ceil(k ** (1 / 3))) + 6
     i, j, l = np.meshgrid(np.arange(m), np.arange(m), np.arange(m), indexing="ij")
     lam = np.pi ** 2 * (i ** 2 / a ** 2 + j ** 2 / b ** 2 + l ** 2 / c ** 2)

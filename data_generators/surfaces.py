@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._check import MAX_COUNT, count, real, triple
+
 __all__ = ["uv_sphere", "torus", "cylinder", "cylinder_eigenvalues", "box_voxels",
            "box_voxel_eigenvalues", "sphere_points"]
 
@@ -26,7 +28,10 @@ def uv_sphere(n_lat: int = 32, n_lon: int = 64, radius: float = 1.0):
     Strongly anisotropic triangles near the poles (a harder test than the icosphere).
     Eigenvalues: :func:`data_generators.sphere_eigenvalues`. Returns ``(V, F)``, outward.
     """
-    n_lat, n_lon = int(n_lat), int(n_lon)
+    n_lat, n_lon = count(n_lat, "n_lat", 2, 10 ** 5), count(n_lon, "n_lon", 3, 10 ** 5)
+    radius = real(radius, "radius", positive=True)
+    if n_lat * n_lon > MAX_COUNT:
+        raise ValueError(f"n_lat * n_lon = {n_lat * n_lon} is more than {MAX_COUNT} vertices")
     if n_lat < 2 or n_lon < 3:
         raise ValueError(f"need n_lat >= 2 and n_lon >= 3, got {n_lat}, {n_lon}")
     th = np.linspace(0, np.pi, n_lat + 1)[1:-1]
@@ -55,7 +60,10 @@ def torus(R: float = 1.0, r: float = 0.4, n_major: int = 64, n_minor: int = 24):
     Its Laplace--Beltrami spectrum has no closed form; use it for properties (symmetry,
     PSD, genus) and refinement studies. Returns ``(V, F)``, outward.
     """
-    n_major, n_minor = int(n_major), int(n_minor)
+    n_major, n_minor = count(n_major, "n_major", 3, 10 ** 5), count(n_minor, "n_minor", 3, 10 ** 5)
+    R, r = real(R, "R", positive=True), real(r, "r", positive=True)
+    if n_major * n_minor > MAX_COUNT:
+        raise ValueError(f"n_major * n_minor = {n_major * n_minor} is more than {MAX_COUNT} vertices")
     if n_major < 3 or n_minor < 3:
         raise ValueError(f"need n_major, n_minor >= 3, got {n_major}, {n_minor}")
     if not 0 < r < R:
@@ -74,7 +82,10 @@ def cylinder(radius: float = 1.0, height: float = 2.0, n_theta: int = 64, n_z: i
     With the natural (Neumann) boundary condition at both rims its eigenvalues are
     :func:`cylinder_eigenvalues`. Returns ``(V, F)``.
     """
-    n_theta, n_z = int(n_theta), int(n_z)
+    n_theta, n_z = count(n_theta, "n_theta", 3, 10 ** 5), count(n_z, "n_z", 1, 10 ** 5)
+    radius, height = real(radius, "radius", positive=True), real(height, "height", positive=True)
+    if n_theta * (n_z + 1) > MAX_COUNT:
+        raise ValueError(f"n_theta * (n_z + 1) = {n_theta * (n_z + 1)} is more than {MAX_COUNT} vertices")
     if n_theta < 3 or n_z < 1:
         raise ValueError(f"need n_theta >= 3 and n_z >= 1, got {n_theta}, {n_z}")
     th = np.linspace(0, 2 * np.pi, n_theta, endpoint=False)
@@ -86,7 +97,8 @@ def cylinder(radius: float = 1.0, height: float = 2.0, n_theta: int = 64, n_z: i
 
 def cylinder_eigenvalues(k: int, radius: float = 1.0, height: float = 2.0) -> np.ndarray:
     """First ``k`` Neumann eigenvalues of the open cylinder: (m/r)² + (πl/h)², m ∈ ℤ, l ≥ 0."""
-    k = int(k)
+    k = count(k, "k", 0, 2000)     # the enumeration grid grows like k^2
+    radius, height = real(radius, "radius", positive=True, limit=1e3), real(height, "height", positive=True, limit=1e3)
     M = int(np.ceil(radius * np.sqrt(k))) + 4 + k
     L = int(np.ceil(height * np.sqrt(k))) + 4 + k
     m = np.arange(-M, M + 1)
@@ -102,9 +114,8 @@ def box_voxels(shape=(16, 12, 8), size=(1.0, 0.75, 0.5)):
     Eigenvalues: :func:`box_voxel_eigenvalues` (exact discrete) and
     :func:`data_generators.box_eigenvalues` (continuous limit).
     """
-    shape = tuple(int(s) for s in shape)
-    if len(shape) != 3 or min(shape) < 1:
-        raise ValueError(f"shape must be three positive integers, got {shape}")
+    shape = triple(shape, "shape", "count")
+    size = triple(size, "size", "length")
     spacing = np.asarray(size, dtype=float) / np.asarray(shape)
     return np.ones(shape, dtype=bool), spacing
 
@@ -114,7 +125,9 @@ def box_voxel_eigenvalues(k: int, shape=(16, 12, 8), size=(1.0, 0.75, 0.5)) -> n
 
     Per axis of N voxels of size h: (4/h²) sin²(π i / (2N)), i = 0..N-1; summed over axes.
     """
-    shape = tuple(int(s) for s in shape)
+    k = count(k, "k")
+    shape = triple(shape, "shape", "count")
+    size = triple(size, "size", "length")
     h = np.asarray(size, dtype=float) / np.asarray(shape)
     axes = [4 / h[a] ** 2 * np.sin(np.pi * np.arange(shape[a]) / (2 * shape[a])) ** 2 for a in range(3)]
     lam = axes[0][:, None, None] + axes[1][None, :, None] + axes[2][None, None, :]
@@ -128,6 +141,10 @@ def sphere_points(n: int, seed: int = 0, nonuniform: float = 0.0, radius: float 
     density proportional to ``1 + s (1 + z/r)`` (denser toward the north pole, max/min
     density ratio ``1 + 2s``). Returns ``(n, 3)``.
     """
+    n = count(n, "n", 1)
+    seed = count(seed, "seed", 0, 2 ** 63)
+    nonuniform = real(nonuniform, "nonuniform", nonnegative=True, limit=1e6)
+    radius = real(radius, "radius", positive=True)
     rng = np.random.default_rng(seed)
     out = np.zeros((0, 3))
     while len(out) < n:

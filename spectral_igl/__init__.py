@@ -11,6 +11,7 @@ eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``diagonal`` (kernel diagonals
 ``quantity`` -> ``viz`` -> ``cli``.
 """
 from . import filters, linalg
+from ._validate import memory_budget, set_memory_budget
 from ._version import __version__
 from .applications import (
                            CriticalPoints,
@@ -58,7 +59,7 @@ from .distances import (
                            wave_distance,
 )
 from .embedding import spectral_embedding
-from .kernels import heat_kernel, spectral_kernel
+from .kernels import heat_kernel, heat_kernels, spectral_kernel
 from .laplacian import (
                            Laplacian,
                            anisotropic_laplacian,
@@ -74,7 +75,7 @@ from .laplacian import (
 from .linalg import dense_eigs, eigs, lambda_min_positive
 
 __all__ = [
-    "__version__",
+    "__version__", "memory_budget", "set_memory_budget",
     # domains
     "Laplacian", "make_laplacian", "laplacian", "point_cloud_laplacian", "anisotropic_laplacian",
     "voxel_laplacian", "graph_laplacian", "tetrahedralize", "polygon_laplacian", "lambda_max",
@@ -83,7 +84,7 @@ __all__ = [
     # engine
     "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
-    "spectral_kernel", "heat_kernel", "kernel_diagonal", "distance_colouring",
+    "spectral_kernel", "heat_kernel", "heat_kernels", "kernel_diagonal", "distance_colouring",
     "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",
     "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",
     "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",

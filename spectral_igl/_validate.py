@@ -24,6 +24,18 @@ __all__ = [
     "as_array",
     "as_delta",
     "DELTAS",
+    "MAX_MAGNITUDE",
+    "check_magnitude",
+    "as_int",
+    "as_tol",
+    "as_real_in",
+    "as_choice",
+    "check_finite_result",
+    "check_spectral_function",
+    "memory_budget",
+    "set_memory_budget",
+    "check_dense_size",
+    "check_tets_have_volume",
 ]
 
 #: the discrete deltas of a kernel column: B^-1 e_i (converges) or e_i (the survey's Eq. (5))
@@ -74,7 +86,8 @@ def as_points(V, name: str = "V", dims=(2, 3), min_rows: int = 1) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         bad = int(np.count_nonzero(~np.isfinite(a).all(axis=1)))
         raise ValueError(f"{name} contains NaN or inf in {bad} row(s)")
-    return a
+    return check_magnitude(a, name, hint="rescale the coordinates (lengths, areas and eigenvalues "
+                                         "scale with them)")
 
 
 def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
@@ -103,8 +116,12 @@ def as_cells(F, n: int, name: str = "F", sizes=(3, 4)) -> np.ndarray:
     return a
 
 
-def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndarray:
-    """Validate a signal of shape ``(n,)`` or ``(n, k)``; return float64 or complex128."""
+def as_signal(f, n: int, name: str = "f", allow_complex: bool = True,
+              max_magnitude: float | None = None) -> np.ndarray:
+    """Validate a signal of shape ``(n,)`` or ``(n, k)``, k >= 1; return float64 or complex128.
+
+    Entries beyond ``max_magnitude`` (default :data:`MAX_MAGNITUDE`) are refused; ``inf``
+    accepts any finite value (for solvers that also serve intermediate vectors)."""
     a = as_array(f, name)
     if a.dtype.kind == "c" and not allow_complex:
         raise TypeError(f"{name} must be real, got {describe(a)}")
@@ -112,10 +129,12 @@ def as_signal(f, n: int, name: str = "f", allow_complex: bool = True) -> np.ndar
         raise TypeError(f"{name} must be numeric, got {describe(a)}")
     if a.ndim not in (1, 2) or a.shape[0] != n:
         raise ValueError(f"{name} must have shape ({n},) or ({n}, k), got {describe(a)}")
+    if a.ndim == 2 and a.shape[1] == 0:
+        raise ValueError(f"{name} has no columns: got {describe(a)}; pass (n,) or (n, k) with k >= 1")
     a = a.astype(np.complex128 if a.dtype.kind == "c" else np.float64, copy=False)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} contains NaN or inf")
-    return a
+    return check_magnitude(a, name, MAX_MAGNITUDE if max_magnitude is None else max_magnitude)
 
 
 def as_index(i, n: int, name: str = "source") -> int:
@@ -337,3 +356,208 @@ def as_delta(delta) -> str:
     if not isinstance(delta, str) or delta not in DELTAS:
         raise ValueError(f"delta must be 'mass' (B^-1 e_i, converges) or 'seed' (e_i), got {describe(delta)}")
     return delta
+
+
+# --- magnitudes, integers, tolerances, choices -------------------------------------------
+
+#: largest magnitude accepted in coordinates and signals: squares and B-norms of larger
+#: values overflow double precision (every operator here is linear, so rescale instead)
+MAX_MAGNITUDE = 1e100
+
+
+def check_magnitude(a: np.ndarray, name: str, limit: float = MAX_MAGNITUDE,
+                    hint: str = "rescale it (every operator here is linear in the signal)") -> np.ndarray:
+    """Refuse a finite array whose largest entry exceeds ``limit`` in magnitude.
+
+    Sums of squares of such values overflow to inf; the message says the size found.
+    """
+    if a.size:
+        top = float(np.max(np.abs(a)))
+        if top > limit:
+            raise ValueError(f"{name} has entries of magnitude up to {top:.3g}, beyond {limit:.0e}: "
+                             f"squares and norms of such values overflow; {hint}")
+    return a
+
+
+def as_int(x, name: str, lo: int | None = None, hi: int | None = None) -> int:
+    """Validate an integer (Python or numpy; not bool, float or str) in ``[lo, hi]``."""
+    if isinstance(x, np.ndarray) and x.ndim == 0 and x.dtype.kind in "iu":
+        x = x.item()
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Integral, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {describe(x)}")
+    x = int(x)
+    if (lo is not None and x < lo) or (hi is not None and x > hi):
+        lo_s = "-inf" if lo is None else str(lo)
+        hi_s = "inf" if hi is None else str(hi)
+        raise ValueError(f"{name} must be an integer in [{lo_s}, {hi_s}], got {x}")
+    return x
+
+
+def as_tol(x, name: str = "tol", allow_zero: bool = False) -> float:
+    """Validate a relative tolerance: finite, in (0, 1) (``[0, 1)`` with ``allow_zero``)."""
+    x = _as_real(x, name)
+    if not ((0.0 <= x if allow_zero else 0.0 < x) and x < 1.0):
+        rng = "[0, 1)" if allow_zero else "(0, 1)"
+        raise ValueError(f"{name} must be a relative tolerance in {rng}, got {x}")
+    return x
+
+
+def as_real_in(x, name: str, lo: float | None = None, hi: float | None = None) -> float:
+    """Validate a finite real number in ``[lo, hi]``."""
+    x = _as_real(x, name)
+    if (lo is not None and x < lo) or (hi is not None and x > hi):
+        raise ValueError(f"{name} must be in [{lo if lo is not None else '-inf'}, "
+                         f"{hi if hi is not None else 'inf'}], got {x}")
+    return x
+
+
+def as_choice(x, name: str, choices) -> str:
+    """Validate a string option against its admissible values."""
+    choices = tuple(choices)
+    if not isinstance(x, str) or x not in choices:
+        raise ValueError(f"{name} must be one of {choices}, got {describe(x)}")
+    return x
+
+
+def check_finite_result(x, what: str, hint: str = "") -> np.ndarray:
+    """Raise instead of returning NaN or inf: ``what`` names the result, ``hint`` the way out."""
+    a = np.asarray(x)
+    if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+        bad = int(np.count_nonzero(~np.isfinite(a)))
+        raise ValueError(f"{what} is not finite at {bad} of {a.size} entries" + (f": {hint}" if hint else ""))
+    return x
+
+
+def check_spectral_function(fn, lo: float, hi: float, name: str = "filter", singular: bool = False,
+                            samples: int = 64) -> None:
+    """Evaluate a user function of the spectrum once on a sample of ``[lo, hi]``.
+
+    Refuses a function that raises, returns the wrong shape, or returns NaN/inf there
+    (a singular filter is not evaluated at 0, where it is defined as 0).
+    """
+    s = np.linspace(lo, hi, samples)
+    if singular:
+        s = s[s > 0]
+    try:
+        with np.errstate(all="ignore"):
+            y = np.asarray(fn(s))
+    except (ArithmeticError, ValueError, TypeError) as err:
+        raise ValueError(f"{name} failed on an array of {s.size} eigenvalues in [{lo:.3g}, {hi:.3g}]: "
+                         f"{err}") from err
+    if y.shape != s.shape:
+        raise ValueError(f"{name} must map an array of eigenvalues of shape {s.shape} to the same shape "
+                         f"(it is applied elementwise), got {describe(y)}")
+    if y.dtype.kind not in "biufc":
+        raise ValueError(f"{name} must return numbers, got {describe(y)}")
+    finite = np.isfinite(y)
+    if not finite.all():
+        where = float(s[~finite][0])
+        hint = ("a filter singular at 0 such as 1/s must be declared with filters.Filter(fn, singular=True)"
+                if where == 0.0 and finite[1:].all() else
+                "check its parameters (e.g. a time so large that t * lambda overflows)")
+        raise ValueError(f"{name} is not finite on the spectrum [{lo:.3g}, {hi:.3g}] (e.g. at "
+                         f"{where:.3g}): {hint}")
+
+
+# --- the size guard --------------------------------------------------------------------------
+
+_BUDGET = [None]          # bytes set by set_memory_budget, None: automatic
+#: fraction of MemAvailable a single dense array may take by default
+BUDGET_FRACTION = 0.25
+#: fallback when /proc/meminfo cannot be read
+BUDGET_FALLBACK = 2 * 1024 ** 3
+
+
+def _available_memory() -> int | None:
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def memory_budget() -> int:
+    """Bytes that one dense allocation or dense eigenproblem may take.
+
+    In order: :func:`set_memory_budget`, the environment variable
+    ``SPECTRAL_IGL_MEMORY_BUDGET`` (bytes), a quarter of ``MemAvailable`` in
+    ``/proc/meminfo``, or 2 GiB.
+    """
+    import os
+
+    if _BUDGET[0] is not None:
+        return _BUDGET[0]
+    env = os.environ.get("SPECTRAL_IGL_MEMORY_BUDGET")
+    if env:
+        try:
+            value = int(float(env))
+        except ValueError as err:
+            raise ValueError(f"SPECTRAL_IGL_MEMORY_BUDGET must be a number of bytes, got {env!r}") from err
+        if value <= 0:
+            raise ValueError(f"SPECTRAL_IGL_MEMORY_BUDGET must be positive, got {env!r}")
+        return value
+    avail = _available_memory()
+    return int(BUDGET_FRACTION * avail) if avail else BUDGET_FALLBACK
+
+
+def set_memory_budget(nbytes) -> None:
+    """Set the bytes one dense allocation may take (``None``: back to the automatic budget).
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> sig.set_memory_budget(10**9); sig.memory_budget()
+    1000000000
+    >>> sig.set_memory_budget(None)
+    """
+    if nbytes is None:
+        _BUDGET[0] = None
+        return
+    _BUDGET[0] = as_int(nbytes, "nbytes", lo=1)
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024.0
+    return f"{n:.1f} PiB"  # pragma: no cover
+
+
+def check_dense_size(nbytes, what: str, alternative: str = "") -> None:
+    """Refuse up front a dense allocation of ``nbytes`` beyond :func:`memory_budget`.
+
+    ``what`` describes the array (e.g. "a (100000, 100000) distance matrix"),
+    ``alternative`` the sparse or streaming way to get what is wanted.
+    """
+    nbytes = float(nbytes)
+    budget = memory_budget()
+    if not nbytes <= budget:
+        raise ValueError(f"{what} would take {_size(nbytes)}, beyond the memory budget of {_size(budget)}"
+                         + (f"; {alternative}" if alternative else "")
+                         + " (raise the budget with spectral_igl.set_memory_budget(bytes) or "
+                           "SPECTRAL_IGL_MEMORY_BUDGET)")
+
+
+# --- element checks ----------------------------------------------------------------------
+
+def check_tets_have_volume(V: np.ndarray, T: np.ndarray, rel_tol: float = 1e-12) -> None:
+    """Refuse (m, 4) index arrays whose "tetrahedra" mostly have zero volume.
+
+    Quads (four coplanar corners per row) have the shape of tetrahedra; read as tets they
+    would give a meaningless Laplacian. ``V`` (n, 3) float and ``T`` (m, 4) int, validated.
+    """
+    if T.ndim != 2 or T.shape[1] != 4 or V.shape[1] != 3 or T.shape[0] == 0:
+        return
+    e1, e2, e3 = (V[T[:, k]] - V[T[:, 0]] for k in (1, 2, 3))
+    with np.errstate(over="ignore", invalid="ignore"):
+        vol = np.abs(np.einsum("ij,ij->i", np.cross(e1, e2), e3))
+        scale = np.max(np.linalg.norm(np.concatenate([e1, e2, e3]), axis=1)) ** 3
+    flat = ~(vol > rel_tol * scale) if scale > 0 else np.ones(len(T), bool)
+    if 2 * np.count_nonzero(flat) > len(T):
+        raise ValueError(f"T of shape {T.shape} is degenerate: zero volume in {np.count_nonzero(flat)} of its "
+                         "rows (the four corners are coplanar); these look like quads, not tetrahedra: use "
+                         "laplacian(V, F, elements='polygon') or split each quad into two triangles")

@@ -25,9 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from ._validate import as_signal
 from .applications import diffusion_smooth, geodesic_distance, optimal_shape_time, optimal_time
 from .approx import METHODS
 from .descriptors import hks
+from .distances import MAX_ORDER
 from .diagonal import METHODS as DIAGONAL_METHODS
 from .filters import FILTERS
 from .io import read_mesh, write_mesh
@@ -36,7 +38,7 @@ from .progress import enabled as progress_enabled
 from .progress import progress_bar
 from .quantity import QUANTITIES, color_meaning, evaluate
 
-__all__ = ["main", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
+__all__ = ["main", "check_writable", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
 
@@ -63,6 +65,30 @@ def _positive(text):
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
     if not np.isfinite(x) or x <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return x
+
+
+def _order(text):
+    x = _positive_int(text)
+    if x > MAX_ORDER:
+        raise argparse.ArgumentTypeError(f"expected an order from 1 to {MAX_ORDER}, got {text!r}")
+    return x
+
+
+def _tolerance(text):
+    x = _positive(text)
+    if x >= 1:
+        raise argparse.ArgumentTypeError(f"expected a relative tolerance in (0, 1), got {text!r}")
+    return x
+
+
+def _nonnegative(text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not np.isfinite(x) or x < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
     return x
 
 
@@ -141,11 +167,11 @@ def _engine_args(p, filter_default, t_help="time/scale t of the filter (default:
     p.add_argument("-f", "--filter", default=filter_default, choices=_FILTERS, metavar="FILTER",
                    help=f"spectral filter: {', '.join(_FILTERS)} (default {filter_default})")
     p.add_argument("-t", "--time", type=_positive, default=None, help=t_help)
-    p.add_argument("--order", type=_positive_int, default=3,
-                   help="order k of the polyharmonic filter (default 3)")
+    p.add_argument("--order", type=_order, default=3,
+                   help=f"order k of the polyharmonic filter, 1 to {MAX_ORDER} (default 3)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
-    p.add_argument("--tol", type=_positive, default=1e-8, help="target accuracy (default 1e-8)")
+    p.add_argument("--tol", type=_tolerance, default=1e-8, help="target accuracy, in (0, 1) (default 1e-8)")
     p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
                    help="distances: how the kernel diagonal is obtained (selinv: selected "
                         "inversion, certified; exact: one application per vertex; probing: "
@@ -196,7 +222,7 @@ def build_parser():
                    help="how the diagonal K_t(i, i) is obtained: selinv (selected inversion, "
                         "certified), exact (one application per vertex), probing (colouring "
                         "estimator), dense; default auto (selinv)")
-    p.add_argument("--tol", type=_positive, default=1e-8)
+    p.add_argument("--tol", type=_tolerance, default=1e-8)
 
     p = sub.add_parser("smooth", help="diffusion smoothing of a signal or of the shape itself",
                        description="Diffusion smoothing f_t = exp(-t L~) f. The signal comes from "
@@ -205,17 +231,17 @@ def build_parser():
                                    "result may be written as a mesh (.obj .off .ply .stl).")
     _input_args(p, outputs=_OUTPUTS + (".obj", ".off", ".ply", ".stl"))
     p.add_argument("--signal", metavar="FILE", help="signal to smooth (.npy or .csv)")
-    p.add_argument("--noise", type=float, default=0.0,
+    p.add_argument("--noise", type=_nonnegative, default=0.0,
                    help="first add Gaussian noise of this standard deviation (relative to the "
                         "signal's range) -- for demonstrations")
-    p.add_argument("--seed", type=int, default=0, help="seed of --noise")
+    p.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of --noise")
     p.add_argument("-t", "--time", type=_positive, default=None,
                    help="diffusion time (default: for --signal, the minimum of the estimated "
                         "risk, optimal_time; for the shape itself, the same risk rule with the "
                         "noise measured along the normals, optimal_shape_time)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
-    p.add_argument("--tol", type=_positive, default=1e-8)
+    p.add_argument("--tol", type=_tolerance, default=1e-8)
 
     p = sub.add_parser("geodesic", help="geodesic distance from a source (heat method or Varadhan)",
                        description="Approximate geodesic distance from a source vertex.")
@@ -261,8 +287,8 @@ def _load_shape(args):
         try:
             V, C = read_mesh(args.mesh)
         except (FileNotFoundError, IsADirectoryError, PermissionError) as err:
-            raise CLIError(f"cannot read {args.mesh}: {err}", EXIT_INPUT) from err
-        except (ValueError, TypeError, RuntimeError, OSError) as err:
+            raise CLIError(str(err), EXIT_INPUT) from err
+        except (ValueError, TypeError, RuntimeError, OSError, MemoryError) as err:
             raise CLIError(f"cannot read {args.mesh}: {err}", EXIT_INPUT) from err
         return V, C, Path(args.mesh).stem
     import data_generators as dg
@@ -288,9 +314,29 @@ def _check_outputs(outs, allowed):
         if ext not in allowed:
             raise CLIError(f"cannot write {out!r}: output type must be one of {', '.join(allowed)}",
                            EXIT_USAGE)
-        parent = Path(out).parent
-        if parent.exists() and not parent.is_dir():
-            raise CLIError(f"cannot write {out!r}: {parent} is not a directory", EXIT_USAGE)
+        check_writable(out)
+
+
+def check_writable(out):
+    """Refuse an output path before any computation: its directory must exist and be
+    writable (none is created), and the path must not be a directory."""
+    path = Path(out)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise CLIError(f"cannot write {out!r}: it is a directory", EXIT_USAGE)
+    if not parent.exists():
+        raise CLIError(f"cannot write {out!r}: the directory {str(parent)!r} does not exist "
+                       "(create it first)", EXIT_USAGE)
+    if not parent.is_dir():
+        raise CLIError(f"cannot write {out!r}: {str(parent)!r} is not a directory", EXIT_USAGE)
+    existed = path.exists()
+    try:   # the one reliable test (permissions, read-only or pseudo file systems): open it
+        with open(path, "ab" if existed else "xb"):
+            pass
+    except OSError as err:
+        raise CLIError(f"cannot write {out!r}: {err.strerror or err}", EXIT_USAGE) from None
+    if not existed:
+        path.unlink()
 
 
 def _laplacian(V, C, args):
@@ -328,8 +374,6 @@ def _write(outs, values, V, C, args, sources=None, kind="auto", title="", names=
     names = _column_names(values, names)
     for out in outs:
         path = Path(out)
-        if path.parent and not path.parent.exists():
-            path.parent.mkdir(parents=True, exist_ok=True)
         ext = path.suffix.lower()
         if ext == ".npy":
             np.save(path, values)
@@ -417,10 +461,11 @@ def _read_signal(path, n):
             f = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=1)
         except (ValueError, OSError):
             raise CLIError(f"cannot read signal {path}: {err}", EXIT_INPUT) from err
-    f = np.asarray(f, dtype=float)
-    if f.shape[0] != n or not np.all(np.isfinite(f)):
-        raise CLIError(f"signal {path} must hold {n} finite values (one per vertex), "
-                       f"got shape {f.shape}", EXIT_INPUT)
+    try:
+        f = as_signal(f, n, f"signal {path}", allow_complex=False)
+    except (ValueError, TypeError) as err:
+        raise CLIError(f"signal {path} must hold {n} finite values (one per vertex) or an (n, d) "
+                       f"array: {err}", EXIT_INPUT) from err
     return f
 
 
@@ -458,7 +503,6 @@ def _job_smooth(args):
     if geometry:
         mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
         for o in mesh_outs:    # the smoothed shape (with its displacement where fields fit)
-            Path(o).parent.mkdir(parents=True, exist_ok=True)
             fields = {"displacement": np.linalg.norm(g - V, axis=1)} \
                 if Path(o).suffix.lower() in _FIELD_MESHES else None
             write_mesh(o, g, C, fields=fields)
@@ -501,6 +545,10 @@ def _job_view(args):
     if args.screenshot is None and not display_available():  # before any work
         raise CLIError("no display available for the interactive viewer: use "
                        "--screenshot FILE.png to render off screen", EXIT_USAGE)
+    if args.screenshot is not None:
+        if Path(args.screenshot).suffix.lower() != ".png":
+            raise CLIError(f"--screenshot must be a .png file, got {args.screenshot!r}", EXIT_USAGE)
+        check_writable(args.screenshot)
     V, C, name = _load_shape(args)
     if args.source >= len(V):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
@@ -512,7 +560,6 @@ def _job_view(args):
                     source=args.source, tol=args.tol, off_screen=True if off else None,
                     diagonal=args.diagonal, camera=args.view, cmap=args.cmap)
     if off:
-        Path(args.screenshot).parent.mkdir(parents=True, exist_ok=True)
         viewer.screenshot(args.screenshot)
         viewer.close()
         _say(args, viewer.status().splitlines()[0] + f"\nwrote {args.screenshot}")

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_positive, describe
+from ._validate import as_array, as_int, as_positive, as_real_in, describe
 from .diagonal import kernel_diagonal
+from .diagonal.multiscale import family_diagonals, heat_diagonals
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian
 from .linalg import cached_eigs, dense_eigs
@@ -13,10 +14,19 @@ from .progress import progress_bar
 __all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
 
 
+#: most times or energies per call (each is one kernel diagonal)
+MAX_SCALES = 1000
+
+
 def _values(x, name):
-    a = np.asarray(x, dtype=float) if not isinstance(x, (str, bytes)) else None
-    if a is None or a.ndim > 1 or a.size == 0 or not np.all(np.isfinite(a)):
+    a = as_array(x, name)
+    if a.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be real numbers, got {describe(x)}")
+    a = a.astype(float)
+    if a.ndim > 1 or a.size == 0 or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be a finite scalar or 1-D array, got {describe(x)}")
+    if a.size > MAX_SCALES:
+        raise ValueError(f"{name} has {a.size} values, more than {MAX_SCALES} (one kernel diagonal each)")
     return a
 
 
@@ -63,20 +73,45 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
+    Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices, share one set of poles
+    (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
+    as one time, each time with its own certified bound (``kernel_diagonal`` options other
+    than ``tol`` select the one-time-at-a-time path).
+
     Returns
     -------
     (n,) float for a scalar time, (n, len(times)) float for an array of times.
     """
     lap = as_laplacian(lap)
     T = _values(times, "times")
+    Tv = T.reshape(-1)
+    for t in Tv:
+        as_positive(t, "time")
+    if _family(lap, method, Tv.size, kwargs):
+        with progress_bar(T.size, "hks", progress, unit="time") as bar:
+            out = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
+            bar.update(T.size)
+        return out
     cols = []
     with progress_bar(T.size, "hks", progress, unit="time") as bar:
-        for t in T.reshape(-1):
-            cols.append(kernel_diagonal(lap, heat(as_positive(t, "time")), method=method,
-                                        progress=progress, **kwargs))
+        for t in Tv:
+            cols.append(kernel_diagonal(lap, heat(float(t)), method=method, progress=progress, **kwargs))
             bar.set_postfix_str(f"t={t:.3g}")
             bar.update()
     return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
+
+
+def _family(lap, method, count, kwargs) -> bool:
+    """Whether several filters go through the common-pole diagonals: ``"selinv"``, or
+    ``"auto"`` above the dense limit (where factorizations, not the fits, dominate; below it
+    ``"auto"`` keeps the one-filter-at-a-time results)."""
+    from .diagonal import EXACT_MAX, selinv_supported
+
+    if count < 2 or method not in ("auto", "selinv") or set(kwargs) - {"tol"}:
+        return False
+    if method == "auto" and lap.n <= EXACT_MAX:
+        return False
+    return selinv_supported(lap, heat(1.0))
 
 
 def _wks_filter(e, sigma):
@@ -159,21 +194,43 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         if Ev.size < 2:
             raise ValueError("sigma is required for a single energy")
         sigma = 7.0 * (Ev.max() - Ev.min()) / (Ev.size - 1)
-    sigma = as_positive(sigma, "sigma")
+    sigma = as_real_in(sigma, "sigma", 1e-8, 1e3)
+    if np.abs(Ev).max() > 1e3:
+        raise ValueError(f"energies are log-eigenvalues, within [-1000, 1000] (double precision spans "
+                         f"about [-745, 710]), got {float(Ev[np.argmax(np.abs(Ev))]):g}")
     if method == "eigen":
+        k = as_int(k, "k", lo=1, hi=lap.n)
+        if kwargs:
+            raise TypeError(f"method='eigen' takes no diagonal options, got {sorted(kwargs)}")
         c = lap.n_components
-        kk = c + int(k)
+        if c >= lap.n:
+            raise ValueError("the shape has no non-zero eigenvalue (every vertex is its own component)")
+        kk = c + k
         lam, X = cached_eigs(lap, kk if kk < lap.n else None)
         lam, X = lam[c:], X[:, c:]
-        Psi = np.exp(-((Ev[None, :] - np.log(lam)[:, None]) ** 2) / (2.0 * sigma ** 2))
+        with np.errstate(divide="ignore"):
+            z = -(((Ev[None, :] - np.log(lam)[:, None]) / sigma) ** 2) / 2.0
+        # normalised by its largest weight per energy: the ratio is unchanged, nothing underflows
+        Psi = np.exp(z - z.max(axis=0))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
     else:
+        filts = [_wks_filter(float(e), sigma) for e in Ev]
+        D = None
+        if _family(lap, method, Ev.size, kwargs):
+            # common poles for all energies (set-valued AAA), each energy certified
+            tol = kwargs.get("tol", 1e-8)
+            D = family_diagonals(lap, filts, max(tol * 1e-1, 1e-12), scales=np.exp(Ev)).values
         cols = []
         bar = progress_bar(Ev.size, "wks", progress, unit="energy")
-        for e in Ev:
-            f = _wks_filter(float(e), sigma)
-            d = np.real(kernel_diagonal(lap, f, method=method, progress=progress, **kwargs))
-            cols.append(d / _wks_trace(lap, f, d))
+        for k, f in enumerate(filts):
+            d = D[:, k] if D is not None else np.real(kernel_diagonal(lap, f, method=method,
+                                                                       progress=progress, **kwargs))
+            tr = _wks_trace(lap, f, d)
+            if not tr > 0:
+                raise ValueError(f"the WKS band at energy {float(Ev[k]):g} (sigma {sigma:g}) holds no "
+                                 "eigenvalue of the shape to double precision; choose energies within "
+                                 "[log lambda_2, log lambda_max] or use method='eigen'")
+            cols.append(d / tr)
             bar.update()
         bar.close()
         out = np.stack(cols, axis=1)
@@ -192,7 +249,11 @@ def auto_diffusion_function(lap, t, method: str = "auto", **kwargs):
     """
     lap = as_laplacian(lap)
     T = _values(t, "t")
+    for ti in T.reshape(-1):
+        as_positive(ti, "t")
     c = lap.n_components
+    if c >= lap.n:
+        raise ValueError("the shape has no non-zero eigenvalue (every vertex is its own component)")
     lam2 = float(cached_eigs(lap, c + 1)[0][c])
     out = hks(lap, T / lam2, method=method, **kwargs) * lap.area()
     return out

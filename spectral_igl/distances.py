@@ -15,9 +15,10 @@ import warnings
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_positive
+from ._validate import as_delta, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
-from .diagonal import EXACT_MAX, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal import EXACT_MAX, check_diagonal_options, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal.multiscale import heat_columns
 from .filters import (
     biharmonic,
     check_filter,
@@ -27,7 +28,7 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .kernels import kernel_columns
+from .kernels import block_sources, kernel_columns
 from .laplacian import as_laplacian
 from .progress import progress_bar
 
@@ -50,6 +51,8 @@ __all__ = [
 ]
 
 BLOCK = 64
+#: largest order of :func:`polyharmonic_distance`
+MAX_ORDER = 16
 #: one-to-many with more targets than this (on a large mesh) goes through the diagonal
 MANY_TARGETS = 256
 
@@ -136,6 +139,11 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     delta = as_delta(delta)
     n = lap.n
     s = as_index(source, n, "source")
+    k, distance, samples, rtol, max_colours, tol, _ = check_diagonal_options(
+        n, diagonal, k, distance, samples, rtol, max_colours, tol, method)
+    max_recompute = None if max_recompute is None else as_int(max_recompute, "max_recompute", lo=0)
+    if targets is not None:
+        as_indices(targets, n, "targets")
     info = {}
     if diagonal == "eigen":
         d = _eigen_distance(lap, filt, s, k, delta)
@@ -230,7 +238,7 @@ def _select(d, targets, n):
 
 def _eigen_distance(lap, filt, s, k, delta):
     """Truncated-eigenpair distance from s to all vertices (the classical baseline)."""
-    k = 100 if k is None else int(k)
+    k = 100 if not k else int(k)
     lam, W = low_rank(lap, max(1, min(k, lap.n)), delta)
     w = np.abs(phi_values(filt, lam, lap.n_components)) ** 2
     d2 = ((W - W[s]) ** 2) @ w
@@ -278,14 +286,23 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     filt = check_filter(filt)
     delta = as_delta(delta)
     S = as_indices(seeds, lap.n, "seeds")
-    op = spectral_operator(lap, filt, method, tol)
-    blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
-    with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
-        cols = []
-        for blk in blocks:
-            cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
-            bar.update()
-    C = np.concatenate(cols, axis=1)
+    m = S.size
+    check_dense_size(8.0 * (2 * lap.n * m + 4 * m * m),
+                     f"the kernel columns ({lap.n}, {m}) and the ({m}, {m}) distance matrix of {m} seeds",
+                     "use fewer seeds, or OneToAll(lap, filt).distance(seed) one seed at a time")
+    block = as_int(block, "block", lo=1)
+    if filt.kind == "heat" and block_sources(lap, method, delta, S.size):
+        # one factorization per pole, every seed in one block right-hand side
+        C = heat_columns(lap, [filt.params["t"]], S, tol=tol)[0][:, :, 0]
+    else:
+        op = spectral_operator(lap, filt, method, tol)
+        blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
+        with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
+            cols = []
+            for blk in blocks:
+                cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
+                bar.update()
+        C = np.concatenate(cols, axis=1)
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()
@@ -337,7 +354,12 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
     r"""Poly-harmonic distance of integer order ``k``: :math:`|\varphi|^2(s) = s^{-k}`.
 
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
+
+    ``k`` is at most :data:`MAX_ORDER`: :math:`\lambda^{-k}` spans
+    :math:`(\lambda_{max}/\lambda_{min})^k`, beyond double precision for larger orders on
+    any mesh, and the distance is then that of the first eigenfunction alone.
     """
+    k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return spectral_distance(lap, polyharmonic(k), source, targets, **kwargs)
 
 
@@ -449,6 +471,7 @@ def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
     r"""(m, m) poly-harmonic distances of order ``k``,
     :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2`; entries equal
     :func:`polyharmonic_distance`."""
+    k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
 
 

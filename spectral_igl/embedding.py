@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numbers
 
+from ._validate import check_finite_result
 from .diagonal import phi_values
 from .filters import check_filter
 from .laplacian import as_laplacian
@@ -44,4 +45,5 @@ def spectral_embedding(lap, filt, k: int):
         raise ValueError(f"k must be in [1, {n - c}], got {k}")
     lam, X = eigs(lap, c + k) if c + k < n else dense_eigs(lap)
     ph = phi_values(filt, lam, c)
+    check_finite_result(ph[c:c + k], f"{filt!r} at the {k} eigenvalues", "check the filter's parameters")
     return (X * ph[None, :])[:, c:c + k]

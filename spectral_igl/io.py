@@ -10,7 +10,7 @@ import numpy as np
 
 from ._validate import as_cells, as_mesh_arrays, as_points, as_signal, describe
 
-__all__ = ["read_mesh", "write_mesh"]
+__all__ = ["read_mesh", "write_mesh", "check_mesh_file"]
 
 _TRI = (".obj", ".off", ".ply", ".stl", ".wrl")
 
@@ -39,21 +39,27 @@ def read_mesh(path, polygons: bool = False):
     ------
     FileNotFoundError
         The file does not exist.
+    IsADirectoryError
+        ``path`` is a directory.
     ValueError
-        The extension is not supported, or the file holds no valid mesh.
+        The extension is not supported, or the file holds no valid mesh; a malformed file
+        (see :func:`check_mesh_file`) is refused with its name and line.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a directory, not a mesh file")
     if not path.is_file():
         raise FileNotFoundError(f"no such mesh file: {path}")
     ext = path.suffix.lower()
+    check_mesh_file(path)
     import igl
 
     if ext == ".mesh":
         try:
             V, T, _ = igl.readMESH(str(path))
-        except RuntimeError as err:
+        except (RuntimeError, MemoryError) as err:
             raise ValueError(f"could not read tetrahedral mesh {path}: {err}") from err
         if T.size == 0:
             raise ValueError(f"{path} holds no tetrahedra")
@@ -79,7 +85,7 @@ def read_mesh(path, polygons: bool = False):
         return V, (np.vstack(F) if len(sizes) == 1 else F)
     try:
         V, F = igl.read_triangle_mesh(str(path))
-    except RuntimeError as err:
+    except (RuntimeError, MemoryError) as err:
         raise ValueError(f"could not read mesh {path}: not a valid {ext[1:].upper()} file") from err
     if V.size == 0 or F.size == 0:
         raise ValueError(f"{path} holds no triangles")
@@ -163,6 +169,172 @@ def write_mesh(path, V, F=None, fields=None) -> None:
     igl.write_triangle_mesh(str(path), V, F)
 
 
+# ---- structure checks before libigl's readers ---------------------------------------------
+#: smallest bytes per vertex and per element in a text file ("0 0 0\n", "3 0 1 2\n")
+_MIN_TEXT_BYTES = 6
+
+
+def _fail(path, line_no, msg):
+    where = f"{path}, line {line_no}" if line_no else str(path)
+    ext = Path(path).suffix.lower()
+    kind = "MEDIT .mesh" if ext == ".mesh" else ext[1:].upper()
+    raise ValueError(f"{where}: not a valid {kind} file: {msg}")
+
+
+def _text_lines(path):
+    with open(path, "rb") as fh:
+        for no, raw in enumerate(fh, 1):
+            yield no, raw.decode("utf-8", errors="replace").strip()
+
+
+def _check_obj(path):
+    nv = 0
+    for no, line in _text_lines(path):
+        if line.startswith("v "):
+            parts = line.split()
+            if len(parts) < 4:
+                _fail(path, no, f"vertex with {len(parts) - 1} coordinate(s), need 3: {line[:80]!r}")
+            try:
+                [float(x) for x in parts[1:4]]
+            except ValueError:
+                _fail(path, no, f"vertex coordinates are not numbers: {line[:80]!r}")
+            nv += 1
+        elif line.startswith("f "):
+            refs = line.split()[1:]
+            if len(refs) < 3:
+                _fail(path, no, f"face with {len(refs)} vertex/vertices, need at least 3 "
+                                f"(truncated line?): {line[:80]!r}")
+            for r in refs:
+                head = r.split("/", 1)[0]
+                try:
+                    i = int(head)
+                except ValueError:
+                    _fail(path, no, f"face vertex {r!r} is not an integer index: {line[:80]!r}")
+                if i == 0 or i > nv or i < -nv:
+                    _fail(path, no, f"face vertex index {i} is outside the {nv} vertices defined before "
+                                    f"it (OBJ indices start at 1): {line[:80]!r}")
+
+
+def _check_off(path):
+    size = path.stat().st_size
+    lines = ((no, line) for no, line in _text_lines(path) if line and not line.startswith("#"))
+    no, head = next(lines, (1, ""))
+    kw = head.split()[0] if head.split() else ""
+    if not kw.endswith("OFF"):
+        _fail(path, no, f"an OFF file starts with 'OFF', got {head[:80]!r}")
+    rest = head.split()[1:]
+    if not rest:
+        no, counts_line = next(lines, (no + 1, ""))
+        rest = counts_line.split()
+    try:
+        nv, nf = int(rest[0]), int(rest[1])
+    except (ValueError, IndexError):
+        _fail(path, no, f"the counts line must give the numbers of vertices and faces, got {' '.join(rest)[:80]!r}")
+    if nv < 0 or nf < 0:
+        _fail(path, no, f"negative vertex or face count ({nv}, {nf})")
+    if (nv + nf) * _MIN_TEXT_BYTES > size:
+        _fail(path, no, f"the header claims {nv} vertices and {nf} faces, more than a file of "
+                        f"{size} bytes can hold")
+    for _ in range(nv):
+        item = next(lines, None)
+        if item is None:
+            _fail(path, 0, f"the file ends before its {nv} vertices")
+        vno, line = item
+        parts = line.split()
+        try:
+            [float(x) for x in parts[:3]]
+        except ValueError:
+            _fail(path, vno, f"vertex coordinates are not numbers: {line[:80]!r}")
+        if len(parts) < 3:
+            _fail(path, vno, f"vertex with {len(parts)} coordinate(s), need 3: {line[:80]!r}")
+    for _ in range(nf):
+        item = next(lines, None)
+        if item is None:
+            _fail(path, 0, f"the file ends before its {nf} faces")
+        fno, line = item
+        parts = line.split()
+        try:
+            k = int(parts[0])
+            idx = [int(x) for x in parts[1:1 + k]]
+        except (ValueError, IndexError):
+            _fail(path, fno, f"a face line is 'k i1 ... ik' with integers, got {line[:80]!r}")
+        if k < 3 or len(idx) < k:
+            _fail(path, fno, f"face with {min(k, len(idx))} vertex/vertices, need at least 3 "
+                             f"(truncated line?): {line[:80]!r}")
+        if min(idx) < 0 or max(idx) >= nv:
+            _fail(path, fno, f"face vertex index outside [0, {nv}): {line[:80]!r}")
+
+
+def _check_ply(path):
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    if not head.startswith(b"ply"):
+        _fail(path, 1, "a PLY file starts with 'ply'")
+    for no, raw in enumerate(head.split(b"\n"), 1):
+        parts = raw.decode("latin-1").split()
+        if parts[:1] == ["element"] and len(parts) >= 3:
+            try:
+                count = int(parts[2])
+            except ValueError:
+                _fail(path, no, f"element count is not an integer: {' '.join(parts)!r}")
+            if count < 0 or count > size:
+                _fail(path, no, f"the header claims {count} {parts[1]} element(s), more than a file of "
+                                f"{size} bytes can hold")
+        if parts[:1] == ["end_header"]:
+            return
+    _fail(path, 0, "no end_header in the first 64 KiB")
+
+
+def _check_stl(path):
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        head = fh.read(84)
+    if head[:5].lower() == b"solid" and b"\0" not in head[:80]:
+        return       # ASCII STL: libigl parses it line by line
+    if size < 84:
+        _fail(path, 0, f"a binary STL has an 84-byte header, the file has {size} bytes")
+    count = int.from_bytes(head[80:84], "little")
+    if 84 + 50 * count > size:
+        _fail(path, 0, f"the header claims {count} triangles, more than a file of {size} bytes can hold")
+
+
+def _check_medit(path):
+    size = path.stat().st_size
+    lines = ((no, line) for no, line in _text_lines(path) if line and not line.startswith("#"))
+    for no, line in lines:
+        if line.split()[0] in ("Vertices", "Tetrahedra", "Triangles"):
+            key = line.split()[0]
+            rest = line.split()[1:]
+            if not rest:
+                no, nxt = next(lines, (no + 1, ""))
+                rest = nxt.split()
+            try:
+                count = int(rest[0])
+            except (ValueError, IndexError):
+                _fail(path, no, f"{key} must be followed by a count, got {' '.join(rest)[:80]!r}")
+            if count < 0 or count * _MIN_TEXT_BYTES > size:
+                _fail(path, no, f"{key} claims {count} entries, more than a file of {size} bytes can hold")
+
+
+_CHECKS = {".obj": _check_obj, ".off": _check_off, ".ply": _check_ply, ".stl": _check_stl,
+           ".mesh": _check_medit}
+
+
+def check_mesh_file(path) -> None:
+    """Check the structure of a mesh file before a C++ reader sees it.
+
+    Headers that claim more elements than the file can hold, truncated or out-of-range
+    face lines (OBJ, OFF) raise a ``ValueError`` naming the file and the line, instead of
+    a silent drop or an allocation failure inside the reader.
+    """
+    path = Path(path)
+    check = _CHECKS.get(path.suffix.lower())
+    if check is not None:
+        try:
+            check(path)
+        except OSError as err:
+            raise ValueError(f"cannot read {path}: {err}") from err
 def _read_obj_polygons(path: Path):
     """Vertices and faces (lists of 0-based indices) of an OBJ file, faces untouched."""
     V, faces = [], []

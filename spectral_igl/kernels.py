@@ -15,12 +15,14 @@ import numbers
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_positive
+from ._validate import as_delta, as_index, as_indices, as_positive, check_dense_size
 from .approx import spectral_operator
+from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
 from .laplacian import Laplacian, as_laplacian
 
-__all__ = ["spectral_kernel", "heat_kernel", "kernel_columns", "source_indices", "BLOCK"]
+__all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
+           "block_sources", "MANY_SOURCES"]
 
 #: columns per engine call; bounds the (n, block) work arrays
 BLOCK = 64
@@ -40,9 +42,11 @@ def kernel_columns(lap, filt, idx, delta: str = "mass", method: str = "auto", to
 
     With ``return_bound`` also returns the (m,) certified B-norm error bound of each column.
     """
-    op = spectral_operator(lap, filt, method, tol) if op is None else op
     n = lap.n
     idx = np.asarray(idx, dtype=np.int64).reshape(-1)
+    check_dense_size(16.0 * n * idx.size, f"{idx.size} dense kernel columns of length {n}",
+                     "ask for fewer sources at a time, or for distances/diagonals, which need no columns")
+    op = spectral_operator(lap, filt, method, tol) if op is None else op
     dtype = np.complex128 if getattr(filt, "is_complex", False) else np.float64
     out = np.empty((n, idx.size), dtype=dtype)
     bound = np.zeros(idx.size)
@@ -140,4 +144,65 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     True
     """
     t = as_positive(t, "t")
+    lap = as_laplacian(lap)
+    idx, scalar = source_indices(sources, lap.n)
+    if block_sources(lap, method, as_delta(delta), idx.size):
+        return heat_kernels(lap, [t], idx, tol=tol)[:, :, 0]
     return spectral_kernel(lap, heat(t), sources, delta=delta, method=method, tol=tol)
+
+
+#: from this many sources on, ``method="auto"`` heat columns use the common-pole block solves
+MANY_SOURCES = 8
+
+
+def block_sources(lap, method, delta, m) -> bool:
+    """Whether m heat columns go through one factorization per pole with all sources as one
+    block: from :data:`MANY_SOURCES` sources on, above the dense limit (where factorizations,
+    not solves, dominate the cost of the Krylov path)."""
+    from .diagonal import EXACT_MAX
+    from .linalg import ldlt
+
+    return (method == "auto" and delta == "mass" and m >= MANY_SOURCES and lap.n > EXACT_MAX
+            and ldlt.available())
+
+
+def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False):
+    r"""Heat-kernel columns at many times and sources, sharing one set of poles.
+
+    .. math:: K_t(:, i) = e^{-t\tilde L}B^{-1}e_i, \qquad
+              \|K_t(:,i) - \tilde K_t(:,i)\|_B \le \varepsilon_t \|B^{-1}e_i\|_B
+
+    One sparse factorization per common pole of the whole family of times
+    (:func:`spectral_igl.diagonal.multiscale.heat_columns`), each solved with every source
+    as one block right-hand side; adding a time costs a weighted sum.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    times : (T,) float
+        Positive times.
+    sources : int or (m,) int
+    tol : float
+        Certified B-norm error of each column relative to :math:`\|B^{-1}e_i\|_B`.
+    return_bound : bool
+        Also return the (T,) certified :math:`\varepsilon_t`.
+
+    Returns
+    -------
+    K : (n, T) float for one source, (n, m, T) float for m sources.
+
+    Examples
+    --------
+    >>> import numpy as np, spectral_igl as sig
+    >>> from data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> K = sig.kernels.heat_kernels(lap, [0.01, 0.1], [0, 3])
+    >>> K.shape, bool(np.allclose(K[:, 1, 1], sig.heat_kernel(lap, 0.1, 3)))
+    ((162, 2, 2), True)
+    """
+    lap = as_laplacian(lap)
+    idx, scalar = source_indices(sources, lap.n)
+    K, eps = heat_columns(lap, times, idx, tol=tol)
+    if scalar:
+        K = K[:, 0, :]
+    return (K, eps) if return_bound else K

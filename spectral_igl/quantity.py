@@ -10,9 +10,9 @@ import time
 
 import numpy as np
 
-from ._validate import as_index
+from ._validate import as_index, as_int
 from .approx import spectral_operator
-from .distances import spectral_distance
+from .distances import MAX_ORDER, spectral_distance
 from .filters import FILTERS, by_name
 
 __all__ = ["QUANTITIES", "FILTERED", "evaluate", "Evaluation", "uses_time", "color_meaning"]
@@ -112,6 +112,7 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     source = as_index(source, lap.n, "source")
+    order = as_int(order, "order", lo=1, hi=MAX_ORDER)
     if quantity == "geodesic":
         from .applications.geodesics import geodesic_distance
 

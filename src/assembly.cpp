@@ -256,10 +256,113 @@ OutF clip_cells(InF3 Q_, InF1 half_) {
     return A_;
 }
 
+// Intrinsic Delaunay triangulation by edge flips (Fisher et al. 2007; Sharp and Crane 2020):
+// F (m, 3) and edge lengths l (m, 3), l[f, i] opposite corner i. Every interior manifold edge
+// whose opposite angles sum to more than pi is flipped (a stack of suspect edges, each flip
+// pushing the four edges of its quad) until all are Delaunay; boundary and non-manifold
+// edges are never flipped. Returns (l, F) of the intrinsic Delaunay triangulation, the
+// same arrays as libigl's intrinsic_delaunay_triangulation.
+inline double cot_opposite(const double *L, int i) {
+    // cotangent of the angle at corner i of a triangle with edge lengths L
+    double a = L[i], b = L[(i + 1) % 3], c = L[(i + 2) % 3];
+    double s = 0.5 * (a + b + c);
+    double area2 = s * (s - a) * (s - b) * (s - c);
+    double area = area2 > 0 ? std::sqrt(area2) : 0.0;
+    return (b * b + c * c - a * a) / (4.0 * std::max(area, 1e-300));
+}
+
+nb::tuple intrinsic_flips(InF2 l_, InI2 F_) {
+    const size_t m = F_.shape(0);
+    OutF lo_ = make_array({m, 3});
+    int64_t *Fo = new int64_t[std::max<size_t>(3 * m, 1)];
+    nb::capsule owner(Fo, [](void *p) noexcept { delete[] static_cast<int64_t *>(p); });
+    size_t shp[2] = {m, 3};
+    nb::ndarray<nb::numpy, int64_t> Fo_(Fo, 2, shp, owner);
+    double *L = lo_.data();
+    std::copy(l_.data(), l_.data() + 3 * m, L);
+    std::copy(F_.data(), F_.data() + 3 * m, Fo);
+    size_t flips = 0;
+    {
+        nb::gil_scoped_release release;
+        // twin halfedges: h = 3 f + i is the edge opposite corner i of face f
+        std::vector<std::pair<std::pair<int64_t, int64_t>, int64_t>> keys(3 * m);
+        for (size_t f = 0; f < m; ++f)
+            for (int i = 0; i < 3; ++i) {
+                int64_t a = Fo[3 * f + (i + 1) % 3], b = Fo[3 * f + (i + 2) % 3];
+                keys[3 * f + i] = {{std::min(a, b), std::max(a, b)}, (int64_t)(3 * f + i)};
+            }
+        std::sort(keys.begin(), keys.end());
+        std::vector<int64_t> twin(3 * m, -1);
+        for (size_t s = 0; s < keys.size();) {
+            size_t e = s;
+            while (e < keys.size() && keys[e].first == keys[s].first) ++e;
+            if (e - s == 2) {
+                twin[keys[s].second] = keys[s + 1].second;
+                twin[keys[s + 1].second] = keys[s].second;
+            } else if (e - s > 2) {
+                for (size_t k = s; k < e; ++k) twin[keys[k].second] = -2;   // non-manifold
+            }
+            s = e;
+        }
+        std::vector<int64_t> stack;
+        std::vector<char> queued(3 * m, 0);
+        stack.reserve(3 * m);
+        for (size_t h = 0; h < 3 * m; ++h)
+            if (twin[h] >= 0 && (int64_t)h < twin[h]) {
+                stack.push_back((int64_t)h);
+                queued[h] = 1;
+            }
+        const size_t max_flips = 200 * (m + 10);
+        while (!stack.empty() && flips < max_flips) {
+            int64_t h = stack.back();
+            stack.pop_back();
+            queued[h] = 0;
+            int64_t g = twin[h];
+            if (g < 0) continue;
+            int64_t f = h / 3, f2 = g / 3;
+            int i = (int)(h % 3), j = (int)(g % 3);
+            if (f == f2) continue;
+            if (cot_opposite(L + 3 * f, i) + cot_opposite(L + 3 * f2, j) >= -1e-12) continue;
+            int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            int64_t a = Fo[3 * f + i], b = Fo[3 * f + i1], c = Fo[3 * f + i2], d = Fo[3 * f2 + j];
+            double bc = L[3 * f + i], ca = L[3 * f + i1], ab = L[3 * f + i2];
+            double bd = L[3 * f2 + j1], dc = L[3 * f2 + j2];
+            // unfold the quad: b at the origin, c on the x axis, a above and d below
+            double xa = (ab * ab + bc * bc - ca * ca) / (2.0 * bc);
+            double ya = std::sqrt(std::max(ab * ab - xa * xa, 0.0));
+            double xd = (bd * bd + bc * bc - dc * dc) / (2.0 * bc);
+            double yd = -std::sqrt(std::max(bd * bd - xd * xd, 0.0));
+            double ad = std::hypot(xa - xd, ya - yd);
+            int64_t t_ab = twin[3 * f + i2], t_ca = twin[3 * f + i1];
+            int64_t t_bd = twin[3 * f2 + j1], t_dc = twin[3 * f2 + j2];
+            // new faces (a, b, d) and (d, c, a)
+            Fo[3 * f] = a; Fo[3 * f + 1] = b; Fo[3 * f + 2] = d;
+            L[3 * f] = bd; L[3 * f + 1] = ad; L[3 * f + 2] = ab;
+            Fo[3 * f2] = d; Fo[3 * f2 + 1] = c; Fo[3 * f2 + 2] = a;
+            L[3 * f2] = ca; L[3 * f2 + 1] = ad; L[3 * f2 + 2] = dc;
+            int64_t nh[6] = {3 * f, 3 * f + 1, 3 * f + 2, 3 * f2, 3 * f2 + 1, 3 * f2 + 2};
+            int64_t nt[6] = {t_bd, 3 * f2 + 1, t_ab, t_ca, 3 * f + 1, t_dc};
+            for (int k = 0; k < 6; ++k) {
+                twin[nh[k]] = nt[k];
+                if (nt[k] >= 0) twin[nt[k]] = nh[k];
+            }
+            for (int k : {0, 2, 3, 5})
+                if (twin[nh[k]] >= 0 && !queued[nh[k]]) {
+                    stack.push_back(nh[k]);
+                    queued[nh[k]] = 1;
+                }
+            ++flips;
+        }
+    }
+    return nb::make_tuple(lo_, Fo_, flips);
+}
+
 NB_MODULE(_assembly, m) {
     m.doc() = "Compiled per-element kernels of spectral_igl's Laplacian constructors.";
     m.def("anisotropic_faces", &anisotropic_faces, nb::arg("V"), nb::arg("F"), nb::arg("alpha"),
           "(kappa (m, 2), dirs (m, 2, 3), K (m, 3, 3)) of a clean triangle mesh.");
     m.def("clip_cells", &clip_cells, nb::arg("Q"), nb::arg("half"),
           "(n,) tangent-plane Voronoi cell areas of the origin among Q (n, k, 2).");
+    m.def("intrinsic_flips", &intrinsic_flips, nb::arg("l"), nb::arg("F"),
+          "(l, F, flips) of the intrinsic Delaunay triangulation of edge lengths l (m, 3), F (m, 3).");
 }

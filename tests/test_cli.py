@@ -112,6 +112,11 @@ def test_distance_writes_npy_csv_png(tmp_path, capsys):
     from data_generators import icosphere
 
     npy, csv, png = tmp_path / "d.npy", tmp_path / "d.csv", tmp_path / "sub" / "d.png"
+    # an output directory is never created: a missing one is refused before any work
+    code = main(["distance", "--shape", "sphere", "--level", "2", "--out", str(png)])
+    assert code == EXIT_USAGE and "does not exist" in capsys.readouterr().err
+    assert not png.parent.exists()
+    png.parent.mkdir()
     code = main(["distance", "--shape", "sphere", "--level", "2", "--source", "7", "--filter",
                  "biharmonic", "--out", str(npy), "--out", str(csv), "--out", str(png)])
     assert code == EXIT_OK, capsys.readouterr().err

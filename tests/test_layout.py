@@ -30,7 +30,7 @@ STAGES = {
     "cli": 12,
 }
 #: compiled halves of a module, imported by that module alone
-EXTENSIONS = {"laplacian._assembly": {"laplacian.anisotropic", "laplacian.points"},
+EXTENSIONS = {"laplacian._assembly": {"laplacian.anisotropic", "laplacian.points", "laplacian.intrinsic"},
               "linalg._ldlt": {"linalg.ldlt"}}
 
 

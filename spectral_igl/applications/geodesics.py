@@ -4,12 +4,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_mesh_arrays, as_positive, describe, is_mesh_object
+from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe, is_mesh_object
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
+from ..laplacian.intrinsic import intrinsic_delaunay
 from ..laplacian.mesh import element_measures
-from ..linalg import factorize
+from ..linalg import factorize, ldlt
 from ..progress import progress_bar
 
 __all__ = ["HeatGeodesics", "geodesic_distance", "varadhan_distance", "mean_edge_length"]
@@ -67,7 +68,8 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
     smallest :math:`\delta` that gives each triangle inequality a margin of
     ``mollify`` times the mean edge length, so that needle and degenerate triangles
     get a well-defined geometry. The lengths are then flipped to the intrinsic
-    Delaunay triangulation (libigl), where all cotangent weights are non-negative.
+    Delaunay triangulation (:func:`spectral_igl.laplacian.intrinsic.intrinsic_delaunay`,
+    compiled), where all cotangent weights are non-negative.
 
     Returns
     -------
@@ -92,7 +94,7 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
                            l[:, 0] + l[:, 1] - l[:, 2]], axis=1)
         delta = max(0.0, float(np.max(eps - margin)))
         l = l + delta
-    l, Fi = igl.intrinsic_delaunay_triangulation(np.ascontiguousarray(l), F)[:2]
+    l, Fi = intrinsic_delaunay(l, F)
     G, A = _triangle_gradients(l, Fi, n)
     h = float(l.mean())
     AA = sp.diags(np.r_[A, A])
@@ -176,8 +178,9 @@ class HeatGeodesics:
                  mollify: float = 1e-6, progress=None):
         import igl
 
-        if step not in _STEPS:
-            raise ValueError(f"step must be one of {_STEPS}, got {step!r}")
+        if not isinstance(step, str) or step not in _STEPS:
+            raise ValueError(f"step must be one of {_STEPS}, got {describe(step)}")
+        mollify = as_nonnegative(mollify, "mollify")
         lap = _as_laplacian(lap_or_mesh)
         V, C = lap.data["V"], _cells(lap)
         if lap.domain == "tet" and step == "intrinsic_delaunay":
@@ -202,16 +205,32 @@ class HeatGeodesics:
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
         bar.update()
         bar.set_postfix_str("heat factorization")
+        # Poisson solve: ground one vertex per component (the rhs is consistent)
+        ground = np.unique(lap.components, return_index=True)[1]
+        self._free = np.setdiff1d(np.arange(self.n), ground)
+        if step != "engine" and ldlt.available():
+            # M + tL and the grounded L (its grounded rows and columns replaced by the
+            # identity's) have the pattern of L + M: one ordering and symbolic analysis,
+            # two numeric LDLᵀ factorizations
+            pattern = ldlt.Pattern((abs(Lh) + M).tocsc())
+            self._heat = ldlt.LDLT((M + self.t * Lh).tocsc(), pattern)
+            bar.update()
+            bar.set_postfix_str("Poisson factorization")
+            keep = np.ones(self.n)
+            keep[ground] = 0.0
+            K = sp.diags(keep)
+            Lg = (K @ Lp @ K + sp.diags(1.0 - keep)).tocsc()
+            self._poisson, self._grounded = ldlt.LDLT(Lg, pattern), True
+            bar.update()
+            bar.close()
+            return
         if step == "engine":
             self._op = SpectralOperator(lap, heat(self.t))
         else:
             self._heat = factorize((M + self.t * Lh).tocsr())
         bar.update()
         bar.set_postfix_str("Poisson factorization")
-        # Poisson solve: ground one vertex per component (the rhs is consistent)
-        ground = np.unique(lap.components, return_index=True)[1]
-        self._free = np.setdiff1d(np.arange(self.n), ground)
-        self._poisson = factorize(sp.csr_matrix(Lp[self._free][:, self._free]))
+        self._poisson, self._grounded = factorize(sp.csr_matrix(Lp[self._free][:, self._free])), False
         bar.update()
         bar.close()
 
@@ -236,7 +255,13 @@ class HeatGeodesics:
         X[ok] = -g[ok] / norm[ok, None]
         div = self.G.T @ (X * self.A[:, None]).T.ravel()
         phi = np.zeros(self.n)
-        phi[self._free] = self._poisson.solve(div[self._free])
+        if self._grounded:
+            fixed = np.setdiff1d(np.arange(self.n), self._free)
+            div[fixed] = 0.0
+            phi = self._poisson.solve(div)
+            phi[fixed] = 0.0
+        else:
+            phi[self._free] = self._poisson.solve(div[self._free])
         comps = self.lap.components
         out = np.full(self.n, np.inf)
         for c in np.unique(comps[src]):
@@ -272,7 +297,13 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     Returns
     -------
     (n,) float
+        ``inf`` exactly on the vertices of connected components that hold no source (e.g.
+        vertices no face references): no path reaches them.
     """
+    if not isinstance(method, str) or method not in ("heat", "varadhan"):
+        raise ValueError(f"method must be 'heat' or 'varadhan', got {describe(method)}")
+    if method == "varadhan" and step != "intrinsic_delaunay":
+        raise ValueError(f"step applies to method='heat' only, got step={step!r} with method='varadhan'")
     if method == "heat":
         return HeatGeodesics(lap_or_mesh, t=t, step=step, progress=progress).compute(source)
     if method == "varadhan":
@@ -292,7 +323,10 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     source : int
         Source vertex.
     t : float, optional
-        Time; default :math:`4h^2`, ``h`` the mean edge length.
+        Time; default the larger of :math:`4h^2` (``h`` the mean edge length) and
+        :math:`(1.5R)^2/80`, ``R`` the largest Euclidean distance from the source within its
+        component (so that :math:`e^{-d^2/4t}` stays above :math:`e^{-20}` out to about 1.5R),
+        doubled (at most 7 times) until the computed kernel is positive on the whole component.
     normalize : bool, default True
         Divide out the leading term of the short-time expansion,
         :math:`K_t \approx (4\pi t)^{-D/2} e^{-d^2/4t}` (``D`` = 2 for surfaces, 3 for
@@ -351,4 +385,9 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     if normalize:
         logk = logk + 0.5 * D * np.log(4.0 * np.pi * t)
     out[comp] = np.sqrt(np.maximum(-4.0 * t * logk, 0.0))
+    lost = comp & ~np.isfinite(out)
+    if lost.any():
+        raise ValueError(f"the heat kernel at t={t:.3g} underflows at {int(lost.sum())} of the "
+                         f"{int(comp.sum())} vertices connected to the source, so Varadhan's formula has "
+                         "no value there; use a larger t or geodesic_distance(..., method='heat')")
     return out

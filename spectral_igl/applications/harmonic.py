@@ -1,16 +1,17 @@
 """Harmonic and poly-harmonic interpolation with Dirichlet constraints."""
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, describe
+from .._validate import as_indices, as_int, describe
 from ..laplacian import Laplacian, as_laplacian
 from ..linalg import factorize
 
-__all__ = ["harmonic", "constraints", "polyharmonic_matrix"]
+__all__ = ["harmonic", "constraints", "polyharmonic_matrix", "MAX_ORDER"]
+
+#: largest poly-harmonic order: beyond it the system is numerically singular on any mesh
+MAX_ORDER = 8
 
 
 def constraints(lap: Laplacian, fixed, values):
@@ -59,7 +60,9 @@ def harmonic(lap, fixed, values, k: int = 1):
     values : (c,) or (c, m) float
         Dirichlet values at ``fixed`` (a scalar sets all of them).
     k : int, default 1
-        Order: 1 harmonic, 2 biharmonic, ...
+        Order: 1 harmonic, 2 biharmonic, ..., at most :data:`MAX_ORDER` (the condition
+        number of the system grows like :math:`(\lambda_{max}/\lambda_{min})^k` and its
+        fill like :math:`k^2` neighbours per vertex).
 
     Returns
     -------
@@ -88,8 +91,7 @@ def harmonic(lap, fixed, values, k: int = 1):
     (0.0, 1.0, True)
     """
     lap = as_laplacian(lap)
-    if isinstance(k, (bool, np.bool_)) or not isinstance(k, (numbers.Integral, np.integer)) or k < 1:
-        raise ValueError(f"k must be a positive integer, got {describe(k)}")
+    k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     fixed, vals = constraints(lap, fixed, values)
     n = lap.n
     free = np.setdiff1d(np.arange(n), fixed)

@@ -16,16 +16,17 @@ positive and accurate to a few units of round-off relative to itself, however sm
 """
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_positive, describe
+from .._validate import as_int, as_positive, describe
 from ..laplacian import Laplacian
 from ..linalg import factorize
 
-__all__ = ["PositiveHeat", "metzler_stiffness"]
+__all__ = ["PositiveHeat", "metzler_stiffness", "MAX_STEPS"]
+
+#: most backward-Euler steps of one heat application (each is one sparse solve)
+MAX_STEPS = 10000
 
 
 def metzler_stiffness(L) -> sp.csr_matrix:
@@ -80,8 +81,7 @@ class PositiveHeat:
     def __init__(self, lap: Laplacian, t: float, steps: int = 16):
         if not isinstance(lap, Laplacian):
             raise TypeError(f"lap must be a spectral_igl.Laplacian, got {describe(lap)}")
-        if isinstance(steps, bool) or not isinstance(steps, numbers.Integral) or steps < 1:
-            raise ValueError(f"steps must be a positive integer, got {describe(steps)}")
+        as_int(steps, "steps", lo=1, hi=MAX_STEPS)
         self.t = as_positive(t, "t")
         self.steps = int(steps)
         self.n = lap.n

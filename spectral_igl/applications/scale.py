@@ -1,18 +1,19 @@
 """Selection of the diffusion time scale (survey §5.4): risk minimum and L-curve corner."""
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 
-from .._validate import as_signal, describe
-from ..approx import apply_filter
+from .._validate import as_array, as_choice, as_int, as_signal, as_tol, describe
+from ..approx import METHODS, apply_filter
 from ..filters import heat
 from ..laplacian import as_laplacian
 from ..linalg import factorize
 from ..progress import progress_bar
 
-__all__ = ["optimal_time", "shape_noise", "optimal_shape_time", "HeatFamily"]
+__all__ = ["optimal_time", "shape_noise", "optimal_shape_time", "HeatFamily", "MAX_TIMES"]
+
+#: most times :func:`optimal_time` tries (each costs one heat evaluation of 1 + probes columns)
+MAX_TIMES = 1000
 
 
 def _curvature(x, y, s):
@@ -275,8 +276,16 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
     if rule not in ("risk", "lcurve"):
         raise ValueError(f"rule must be 'risk' or 'lcurve', got {rule!r}")
-    if isinstance(probes, bool) or not isinstance(probes, numbers.Integral) or probes < 1:
-        raise ValueError(f"probes must be a positive integer, got {describe(probes)}")
+    probes = as_int(probes, "probes", lo=1, hi=4096)
+    n_times = as_int(n_times, "n_times", lo=7, hi=MAX_TIMES)
+    seed = as_int(seed, "seed", lo=0)
+    as_choice(method, "method", METHODS)
+    tol = as_tol(tol, "tol")
+    Z = lap.component_basis()
+    g = f - Z @ (Z.T @ (lap.B @ f))
+    if not np.sqrt(max(g @ (lap.B @ g), 0.0)) > 1e-12 * np.sqrt(max(f @ (lap.B @ f), 0.0)):
+        raise ValueError("f is constant on every connected component (e.g. zero): diffusion does not "
+                         "change it, so there is no time to choose")
     k = int(probes) if rule == "risk" else 0
     P = np.random.default_rng(seed).choice([-1.0, 1.0], size=(lap.n, k))
     X = np.c_[f, P]
@@ -286,9 +295,15 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
         lo = (0.01 if rule == "risk" else 1.0) / lmax
         hi = 1.0 / fam.lambda_2
         ts = np.logspace(np.log10(lo), np.log10(max(hi, 1000 * lo)), int(n_times))
-    ts = np.asarray(ts, dtype=float)
-    if ts.ndim != 1 or ts.size < 7 or np.any(ts <= 0) or np.any(np.diff(ts) <= 0):
+    ts = as_array(ts, "ts")
+    if ts.dtype.kind not in "biuf":
+        raise TypeError(f"ts must be real times, got {describe(ts)}")
+    ts = ts.astype(float)
+    if ts.ndim != 1 or ts.size < 7 or not np.all(np.isfinite(ts)) or np.any(ts <= 0) \
+            or np.any(np.diff(ts) <= 0):
         raise ValueError(f"ts must be at least 7 increasing positive times, got {ts.size} values")
+    if ts.size > MAX_TIMES:
+        raise ValueError(f"ts has {ts.size} times, more than {MAX_TIMES} (one heat evaluation each)")
     m = lap.mass
     mean = fam.mean[:, 0]
     n_t = ts.size

@@ -1,12 +1,11 @@
 """Entropic optimal transport with the heat kernel (convolutional Wasserstein distance)."""
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
 
-from .._validate import as_positive, as_signal, describe
+from .._validate import as_int, as_positive, as_signal, as_tol, describe
 from ..laplacian import as_laplacian
 from .heat_steps import PositiveHeat
 
@@ -74,9 +73,8 @@ def _sinkhorn_block(heat, A, B, gamma, max_iter, tol):
 
 
 def _check_iter(max_iter, tol):
-    if isinstance(max_iter, bool) or not isinstance(max_iter, numbers.Integral) or max_iter < 1:
-        raise ValueError(f"max_iter must be a positive integer, got {describe(max_iter)}")
-    return as_positive(tol, "tol")
+    as_int(max_iter, "max_iter", lo=1, hi=10 ** 7)
+    return as_tol(tol, "tol")
 
 
 def sinkhorn(lap, mu0, mu1, gamma, heat=None, steps: int = 16, max_iter: int = 5000,

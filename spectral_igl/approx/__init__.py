@@ -55,7 +55,7 @@ import logging
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from .._validate import as_positive, as_signal
+from .._validate import as_int, as_positive, as_signal, as_tol, check_spectral_function
 from ..filters import Filter, as_filter
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
@@ -66,7 +66,7 @@ from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, Taylor
 from .rational import RationalPlan
 from .spectral import DensePlan, EigenPlan
 
-__all__ = ["apply_filter", "SpectralOperator", "spectral_operator", "METHODS", "HEAT_ONLY",
+__all__ = ["apply_filter", "SpectralOperator", "spectral_operator", "METHODS", "HEAT_ONLY", "OPTIONS", "check_engine_options",
            "choose_method"]
 
 log = logging.getLogger(__name__)
@@ -126,6 +126,44 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     ch = ChebyshevPlan(lap, filt, a, b, tol, max_degree=20000)
     cost_ch = (0.0 if lap.lumped else 25.0) + ch.m * (0.2 if lap.lumped else 1.0)
     return "chebyshev" if cost_ch <= cost_si else "shift_invert"
+
+
+#: the method settings :class:`SpectralOperator` takes: name -> (methods that read it, range)
+OPTIONS = {
+    "k": (("eigen",), (1, None)),
+    "max_n": (("dense",), (1, None)),
+    "steps": (("euler", "krylov", "shift_invert"), (1, 100000)),
+    "max_steps": (("krylov", "shift_invert"), (1, 100000)),
+    "degree": (("taylor", "chebyshev", "rational", "power"), (0, 100000)),
+    "max_degree": (("taylor", "chebyshev"), (1, 1000000)),
+    "squarings": (("power",), (0, 60)),
+    "max_solves": (("power",), (1, 10000000)),
+    "nodes": (("contour",), (1, 4096)),
+    "shift": (("shift_invert",), None),
+}
+
+
+def check_engine_options(method: str, options: dict, n: int) -> dict:
+    """Validate method settings before any work: known names, read by ``method``, in range.
+
+    ``method="auto"`` accepts none (the method it picks is not known in advance).
+    """
+    out = {}
+    for name, value in options.items():
+        if name not in OPTIONS:
+            raise TypeError(f"unknown engine option {name!r}; the options are {sorted(OPTIONS)}")
+        methods, rng = OPTIONS[name]
+        if method not in methods:
+            raise ValueError(f"option {name}={value!r} is not used by method {method!r} (it applies to "
+                             f"{', '.join(methods)}); remove it or choose one of those methods")
+        if value is None:
+            out[name] = None
+        elif rng is None:
+            out[name] = as_positive(value, name)
+        else:
+            hi = rng[1] if name != "k" else n
+            out[name] = as_int(value, name, lo=rng[0], hi=hi)
+    return out
 
 
 class SpectralOperator(spla.LinearOperator):
@@ -191,10 +229,12 @@ class SpectralOperator(spla.LinearOperator):
                  backend: str = "auto", **options):
         lap = as_laplacian(lap)
         filt = as_filter(filt)
-        tol = as_positive(tol, "tol")
+        tol = as_tol(tol, "tol")
         if not isinstance(method, str) or method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         backend = check_backend(backend)
+        options = check_engine_options(method, options, lap.n)
+        check_spectral_function(filt, 0.0, lambda_max(lap), repr(filt), singular=filt.singular)
         super().__init__(np.complex128 if filt.is_complex else np.float64, (lap.n, lap.n))
         if method == "auto":
             method = choose_method(lap, filt, tol)

@@ -44,16 +44,17 @@ import logging
 
 import numpy as np
 
-from .._validate import as_delta
+from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size, check_spectral_function
+from ..approx import METHODS as ENGINE_METHODS
 from ..approx import spectral_operator
 from ..filters import check_filter
-from ..laplacian import as_laplacian
+from ..laplacian import as_laplacian, lambda_max
 from ..progress import progress_bar
 from .probing import probing_diagonal
 from .selinv import NoSelinv, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal
 
-__all__ = ["kernel_diagonal", "METHODS", "EXACT_MAX"]
+__all__ = ["kernel_diagonal", "check_diagonal_options", "METHODS", "EXACT_MAX"]
 
 log = logging.getLogger(__name__)
 
@@ -71,6 +72,29 @@ def _gram_apply(lap, op, delta):
     if delta == "mass":
         return op.apply_inverse_mass
     return lambda Z: lap.B @ op.apply(Z)
+
+
+def check_diagonal_options(n: int, method="auto", k=None, distance=None, samples=16, rtol=1e-4,
+                           max_colours=None, tol=1e-8, engine_method="auto", seed=0):
+    """Validate the options of :func:`kernel_diagonal` for a Laplacian of ``n`` vertices.
+
+    Everything is checked before any work; returns ``(k, distance, samples, rtol,
+    max_colours, tol, seed)`` as plain numbers. ``method="dense"`` is refused up front
+    when the dense eigenproblem does not fit the memory budget.
+    """
+    as_choice(method, "diagonal method", METHODS)
+    as_choice(engine_method, "method", ENGINE_METHODS)
+    k = None if k is None else as_int(k, "k", lo=0, hi=n)
+    distance = None if distance is None else as_int(distance, "distance", lo=1, hi=max(n, 1))
+    samples = as_int(samples, "samples", lo=0)
+    rtol = as_tol(rtol, "rtol")
+    max_colours = None if max_colours is None else as_int(max_colours, "max_colours", lo=1, hi=n)
+    tol = as_tol(tol, "tol")
+    seed = as_int(seed, "seed", lo=0)
+    if method == "dense":
+        check_dense_size(6 * 8.0 * n * n, f"the dense ({n}, {n}) eigenproblem of method='dense'",
+                         "use method='selinv' or 'probing'")
+    return k, distance, samples, rtol, max_colours, tol, seed
 
 
 def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int | None = None,
@@ -140,8 +164,9 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     lap = as_laplacian(lap)
     filt = check_filter(filt)
     delta = as_delta(delta)
-    if not isinstance(method, str) or method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    k, distance, samples, rtol, max_colours, tol, seed = check_diagonal_options(
+        lap.n, method, k, distance, samples, rtol, max_colours, tol, engine_method, seed)
+    check_spectral_function(filt, 0.0, lambda_max(lap), repr(filt), singular=filt.singular)
     args = (method, delta, k, distance, samples, rtol, max_colours, float(tol), engine_method, seed)
     diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args, progress=progress))
     diag = diag.copy()    # the cached array stays as computed whatever the caller does

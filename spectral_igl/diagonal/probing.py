@@ -5,6 +5,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, shortest_path
 
+from .._validate import as_choice, as_int, check_dense_size
+from ..laplacian import as_laplacian
 from ..progress import progress_bar
 from .spectral import low_rank, phi_values
 
@@ -22,10 +24,14 @@ def distance_colouring(lap, distance: int = 2, order: str = "bfs") -> np.ndarray
 
     The number of colours is about the number of vertices in a ball of ``distance`` rings.
     """
+    lap = as_laplacian(lap)
     n = lap.n
-    distance = int(distance)
-    if distance < 1:
-        raise ValueError(f"distance must be >= 1, got {distance}")
+    distance = as_int(distance, "distance", lo=1, hi=max(n, 1))
+    as_choice(order, "order", ("bfs", "natural"))
+    deg = lap.L.nnz / max(n, 1)
+    check_dense_size(13.0 * n * min(n, deg ** min(distance, 64)),
+                     f"the distance-{distance} neighbourhoods of {n} vertices",
+                     "use a smaller colouring distance")
     A = sp.csr_matrix((np.ones(lap.L.nnz, dtype=np.int8), lap.L.indices, lap.L.indptr), shape=(n, n))
     A = (A + sp.identity(n, dtype=np.int8, format="csr")).astype(bool).astype(np.int8)
     P = A.copy()

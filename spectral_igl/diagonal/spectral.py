@@ -24,6 +24,10 @@ def phi_values(filt, lam, c: int) -> np.ndarray:
         ph = np.array(filt(lam), dtype=np.complex128 if getattr(filt, "is_complex", False) else float)
     if filt.singular:
         ph[:c] = 0.0
+    if not np.all(np.isfinite(ph)):
+        bad = lam[~np.isfinite(ph)]
+        raise ValueError(f"{filt!r} is not finite at {bad.size} eigenvalue(s) (e.g. {float(np.real(bad[0])):.3g}): "
+                         "check its parameters (e.g. a time so large that t * lambda overflows)")
     return ph
 
 

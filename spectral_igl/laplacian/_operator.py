@@ -197,6 +197,12 @@ def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
         raise ValueError(f"B must have shape {(n, n)}, got {B.shape}")
     if not (np.all(np.isfinite(L.data)) and np.all(np.isfinite(B.data))):
         raise ValueError("L or B contains NaN or inf")
+    d = L.diagonal()
+    if d.size and d.min() < -1e-12 * max(float(np.abs(d).max()), np.finfo(float).tiny):
+        neg = int(np.count_nonzero(d < 0))
+        raise ValueError(f"L must be positive semi-definite (stiffness), but {neg} of its {n} diagonal "
+                         f"entries are negative (min {d.min():.3g}) once its rows sum to 0: this is the "
+                         "sign of libigl's cotmatrix (negative semi-definite); pass -L")
     if np.any(B.diagonal() <= 0):
         raise ValueError(f"B must be positive definite; {int(np.sum(B.diagonal() <= 0))} diagonal entries are <= 0")
     pattern = L if adjacency is None else sp.csr_matrix(adjacency)

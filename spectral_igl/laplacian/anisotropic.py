@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from .._validate import as_cells, as_mesh_arrays, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, star_adjacency
+from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, square, star_adjacency
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
 
@@ -191,7 +191,7 @@ def anisotropic_laplacian(V, F=None, alpha: float = 10.0, mass: str = "full") ->
     r = np.repeat(F, 3, axis=1).ravel()
     c = np.tile(F, (1, 3)).ravel()
     L = sp.csr_matrix((K.ravel(), (r, c)), shape=(n, n))
-    B = mass_matrix(V, F, mass, meas)
+    B = square(mass_matrix(V, F, mass, meas), n)
     referenced = np.zeros(n, dtype=bool)
     referenced[F.ravel()] = True
     if not referenced.all():

@@ -13,7 +13,7 @@ from collections import OrderedDict
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["Cache", "SLOTS", "nbytes_of"]
+__all__ = ["Cache", "SLOTS", "nbytes_of", "available_memory", "BUDGET_FRACTION"]
 
 log = logging.getLogger(__name__)
 
@@ -29,6 +29,23 @@ SLOTS = {
     "kernel": ("selected-inverse kernels, keyed by (filter, tol)", 16),
     "operator": ("spectral operators, keyed by (filter, method, tol, backend)", 32),
 }
+
+
+#: default byte budget of the ``"factor"`` slot, as a fraction of the available memory
+BUDGET_FRACTION = 0.25
+
+
+def available_memory() -> int:
+    """Bytes of memory available to new allocations (``MemAvailable`` of /proc/meminfo; 8 GiB
+    where that file is absent)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 8 * 2 ** 30
 
 
 def nbytes_of(obj) -> int:
@@ -53,6 +70,12 @@ def nbytes_of(obj) -> int:
 class Cache:
     """Named slots of derived quantities of one Laplacian, each an LRU mapping.
 
+    The ``"factor"`` slot also has a byte budget (``factor_budget``, default
+    :data:`BUDGET_FRACTION` of :func:`available_memory` when the cache is made): when the
+    factorizations it holds exceed it, the least recently used are evicted until they fit
+    (the newest entry is always kept). ``nbytes`` of each entry is exact for the package's
+    LDLᵀ and SuperLU factors and an estimate for CHOLMOD's.
+
     Examples
     --------
     >>> c = Cache()
@@ -62,12 +85,54 @@ class Cache:
     8.0
     >>> c.clear(); len(c)
     0
+    >>> c = Cache(factor_budget=100)
+    >>> _ = c.put("factor", "a", np.zeros(10)); _ = c.put("factor", "b", np.zeros(10))
+    >>> c.keys("factor")          # 160 bytes > 100: the older one is evicted
+    ['b']
     """
 
-    def __init__(self):
+    def __init__(self, factor_budget: int | None = None):
         self._slots = {name: OrderedDict() for name in SLOTS}
+        self._bytes = {name: {} for name in SLOTS}
         self.hits = 0
         self.misses = 0
+        self.evictions = 0
+        self.factor_budget = factor_budget
+
+    @property
+    def factor_budget(self) -> int:
+        """Byte budget of the ``"factor"`` slot (settable; None restores the default)."""
+        return self._budget
+
+    @factor_budget.setter
+    def factor_budget(self, value) -> None:
+        if value is None:
+            value = int(BUDGET_FRACTION * available_memory())
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+                or not value >= 0:
+            raise ValueError(f"factor_budget must be a non-negative number of bytes, got {value!r}")
+        self._budget = int(value)
+        self._evict("factor")
+
+    def slot_nbytes(self, slot: str) -> int:
+        """Bytes held by one slot."""
+        self._slot(slot)
+        return int(sum(self._bytes[slot].values()))
+
+    def _evict(self, slot: str) -> None:
+        d = self._slot(slot)
+        limit = SLOTS[slot][1]
+        while limit is not None and len(d) > limit:
+            self._drop(slot, next(iter(d)))
+        if slot == "factor":
+            while len(d) > 1 and self.slot_nbytes(slot) > self._budget:
+                self._drop(slot, next(iter(d)))
+
+    def _drop(self, slot, key):
+        self._slots[slot].pop(key, None)
+        self._bytes[slot].pop(key, None)
+        self.evictions += 1
+        log.debug("cache: evicted %s %r", slot, key)
 
     def _slot(self, slot: str) -> OrderedDict:
         try:
@@ -88,10 +153,8 @@ class Cache:
         d = self._slot(slot)
         d[key] = value
         d.move_to_end(key)
-        limit = SLOTS[slot][1]
-        while limit is not None and len(d) > limit:
-            old, _ = d.popitem(last=False)
-            log.debug("cache: evicted %s %r", slot, old)
+        self._bytes[slot][key] = nbytes_of(value)
+        self._evict(slot)
         return value
 
     def fetch(self, slot: str, key, build):
@@ -118,13 +181,17 @@ class Cache:
         d = self._slot(slot)
         if key is None:
             d.clear()
+            self._bytes[slot].clear()
         else:
             d.pop(key, None)
+            self._bytes[slot].pop(key, None)
 
     def clear(self) -> None:
         """Drop every cached factorization and derived quantity."""
         for d in self._slots.values():
             d.clear()
+        for b in self._bytes.values():
+            b.clear()
 
     def __len__(self) -> int:
         return sum(len(d) for d in self._slots.values())

@@ -6,7 +6,7 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, describe
+from .._validate import as_cells, check_dense_size, describe
 from ._operator import Laplacian, make_laplacian
 
 __all__ = ["graph_laplacian"]
@@ -46,6 +46,8 @@ def graph_laplacian(n, edges, weights=None) -> Laplacian:
     n = int(n)
     if n < 1:
         raise ValueError(f"n must be at least 1, got {n}")
+    check_dense_size(64.0 * n, f"the per-vertex arrays of a graph of n = {n} vertices",
+                     "n is the number of vertices, not of edges; a graph this large does not fit")
     E = as_cells(edges, n, "edges", sizes=(2,))
     if weights is None:
         w = np.ones(E.shape[0])

@@ -6,10 +6,10 @@ import warnings
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_cells, as_mesh_arrays, as_points
+from .._validate import as_cells, as_mesh_arrays, as_points, check_tets_have_volume
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "mass_matrix", "full_mass",
+__all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "square", "mass_matrix", "full_mass",
            "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness",
            "mean_value_weights"]
 
@@ -64,6 +64,7 @@ def clean_mesh_with_measures(V, C, rel_tol: float = 1e-12):
     C = as_cells(C, V.shape[0], "T" if len(shape) == 2 and shape[1] == 4 else "F")
     if C.shape[1] == 4 and V.shape[1] != 3:
         raise ValueError(f"tetrahedra need 3-D vertices; V has shape {V.shape}")
+    check_tets_have_volume(V, C)
     s = np.sort(C, axis=1)
     repeated = np.any(s[:, 1:] == s[:, :-1], axis=1)
     with np.errstate(over="ignore", invalid="ignore"):   # overflowing measures are dropped below
@@ -102,6 +103,17 @@ def _edge_manifold(F: np.ndarray) -> bool:
     return bool(counts.max() <= 2)
 
 
+def square(A: sp.spmatrix, n: int) -> sp.csr_matrix:
+    """``A`` padded with zero rows and columns to (n, n).
+
+    libigl sizes some matrices by the largest referenced index, so vertices that no
+    element references at the end of ``V`` would otherwise be missing.
+    """
+    A = sp.csr_matrix(A)
+    if A.shape != (n, n):
+        A = A.copy()
+        A.resize((n, n))
+    return A
 def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
     r"""(n, n) mean-value weights of a triangle mesh (Floater 2003), not symmetric.
 
@@ -178,15 +190,6 @@ def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None
         return igl.massmatrix(V, C, igl.MASSMATRIX_TYPE_VORONOI).tocsr()
     # barycentric: row sums of the consistent mass (the lumped mass of tets as well)
     return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
-
-
-def _padded(A, n: int) -> sp.csr_matrix:
-    """``A`` as (n, n): libigl sizes some matrices by the largest referenced vertex."""
-    A = sp.csr_matrix(A)
-    if A.shape[0] < n:
-        A = sp.csr_matrix((A.data, A.indices, np.r_[A.indptr, np.full(n - A.shape[0], A.indptr[-1])]),
-                          shape=(n, n))
-    return A
 
 
 def _element_kind(V, F, elements: str):
@@ -348,8 +351,8 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         warnings.warn("mesh has non-manifold edges; intrinsic Delaunay flips are undefined there, "
                       "using weights='cotan'", RuntimeWarning, stacklevel=2)
         weights = "cotan"
-    L = _padded(cotan_stiffness(V, C, weights), n)
-    B = _padded(mass_matrix(V, C, mass, meas), n)
+    L = square(cotan_stiffness(V, C, weights), n)
+    B = square(mass_matrix(V, C, mass, meas), n)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
     n_unref = int(n - referenced.sum())

@@ -3,10 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_cells, as_mesh_arrays, as_points, as_positive
+from .._validate import as_cells, as_mesh_arrays, as_points, as_positive, as_real_in
 from .mesh import element_measures
 
 __all__ = ["tetrahedralize"]
+
+
+#: smallest target edge length, relative to the bounding-box diagonal (about 1e7 tetrahedra)
+MIN_EDGE_FAC = 5e-3
 
 
 def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: float | None = None,
@@ -21,11 +25,12 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
     V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``F`` omitted
     F : (m, 3) int, optional
         A closed (or nearly closed) triangle surface.
-    edge_length_fac : float in (0, 1]
+    edge_length_fac : float in [0.005, 1]
         Target tetrahedron edge length as a fraction of the bounding-box diagonal.
     edge_length_abs : float or None
-        Absolute target edge length; overrides ``edge_length_fac``.
-    epsilon : float
+        Absolute target edge length (at least 0.005 x the diagonal); overrides
+        ``edge_length_fac``.
+    epsilon : float in [1e-6, 1]
         Envelope size relative to the bounding-box diagonal.
     optimize : bool
         Improve element quality (slower).
@@ -48,14 +53,24 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
     V, F = as_mesh_arrays(V, F)
     V = as_points(V, "V", dims=(3,), min_rows=4)
     F = as_cells(F, V.shape[0], "F", sizes=(3,))
-    edge_length_fac = as_positive(edge_length_fac, "edge_length_fac")
-    if edge_length_fac > 1.0:
-        raise ValueError(f"edge_length_fac must be in (0, 1], got {edge_length_fac}")
+    edge_length_fac = as_real_in(edge_length_fac, "edge_length_fac", MIN_EDGE_FAC, 1.0)
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     if edge_length_abs is not None:
         edge_length_abs = as_positive(edge_length_abs, "edge_length_abs")
-    epsilon = as_positive(epsilon, "epsilon")
+        if edge_length_abs < MIN_EDGE_FAC * diag:
+            raise ValueError(f"edge_length_abs = {edge_length_abs:g} is below {MIN_EDGE_FAC:g} x the bounding-box "
+                             f"diagonal ({diag:.3g}): about {(1 / MIN_EDGE_FAC) ** 3:.0e} tetrahedra or more")
+    epsilon = as_real_in(epsilon, "epsilon", 1e-6, 1.0)
+    if optimize not in (True, False) or quiet not in (True, False):
+        raise TypeError(f"optimize and quiet must be bools, got {optimize!r}, {quiet!r}")
     if element_measures(V, F).max() <= 0:
         raise ValueError("F has no face of positive area")
+    # fTetWild is given only the vertices the faces use (unreferenced ones stall it)
+    used = np.unique(F)
+    if used.size < V.shape[0]:
+        remap = np.full(V.shape[0], -1, dtype=np.int64)
+        remap[used] = np.arange(used.size)
+        V, F = np.ascontiguousarray(V[used]), remap[F]
     import os
     import tempfile
 

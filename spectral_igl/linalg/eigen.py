@@ -7,6 +7,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
+from .._validate import as_int, as_tol, check_dense_size, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from ..progress import progress_bar
 from . import ldlt
@@ -47,10 +48,15 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     lap = as_laplacian(lap)
     n, c = lap.n, lap.n_components
     if isinstance(k, bool) or not isinstance(k, numbers.Integral):
-        raise TypeError(f"k must be an integer, got {type(k).__name__}")
+        raise TypeError(f"k must be an integer, got {describe(k)}")
     k = int(k)
     if not 1 <= k < n:
         raise ValueError(f"k must be in [1, {n - 1}] for n = {n}, got {k}")
+    tol = as_tol(tol, "tol", allow_zero=True)
+    # the (n, k) eigenvectors and ARPACK's (n, ncv) Lanczos basis, ncv about 2k
+    check_dense_size(8.0 * n * (3 * k + 32), f"{k} eigenvectors of length {n} (with the Lanczos basis)",
+                     "ask for fewer pairs, or use the spectrum-free engine (apply_filter, "
+                     "kernel_diagonal) that needs no eigenvectors")
     Z = lap.component_basis()  # sparse (n, c), B-orthonormal basis of ker L
     if k <= c:
         return np.zeros(k), Z[:, :k].toarray()
@@ -96,11 +102,12 @@ def dense_eigs(lap: Laplacian, k: int | None = None, max_n: int = 8000):
     """
     lap = as_laplacian(lap)
     n, c = lap.n, lap.n_components
+    max_n = as_int(max_n, "max_n", lo=1)
     if n > max_n:
         raise ValueError(f"dense_eigs is for small meshes: n = {n} > max_n = {max_n}; use eigs(lap, k)")
-    k = n if k is None else int(k)
-    if not 1 <= k <= n:
-        raise ValueError(f"k must be in [1, {n}], got {k}")
+    k = n if k is None else as_int(k, "k", lo=1, hi=n)
+    check_dense_size(6 * 8.0 * n * n, f"a dense ({n}, {n}) generalized eigenproblem",
+                     "use eigs(lap, k) for the k smallest pairs")
     Z = lap.component_basis().toarray()
     # eigenproblem on the complement of ker L, then prepend the exact kernel
     Lf, Bf = lap.L.toarray(), lap.B.toarray()

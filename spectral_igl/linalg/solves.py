@@ -19,7 +19,7 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_signal, describe
+from .._validate import as_signal, check_finite_result, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from . import ldlt
 from .factor import available_backends, factorize
@@ -99,6 +99,9 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
     lap = as_laplacian(lap)
     beta, theta = _scalar(beta, "beta"), _scalar(theta, "theta")
     backend = check_backend(backend)
+    if theta == 0:
+        raise ValueError(f"theta must be nonzero: theta B + beta L is singular for theta = 0 (constants "
+                         f"are in the kernel of L), got theta={theta}; use pseudo_solve for L")
     cplx = isinstance(beta, complex) or isinstance(theta, complex)
     spd = (not cplx) and theta > 0 and beta >= 0
     if cplx and backend == "auto" and ldlt.available() and _ldlt_safe(lap, beta, theta):
@@ -117,16 +120,26 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
         A = (theta * lap.B + beta * lap.L).tocsr()
         return factorize(A, backend=backend, spd=True) if spd else factorize(A, backend="superlu", spd=False)
 
-    return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
+    try:
+        return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
+    except RuntimeError as err:   # the sparse backends' word for a numerically singular matrix
+        raise ValueError(f"theta B + beta L cannot be factorized for beta={beta}, theta={theta} (singular "
+                         f"or denormal: -theta/beta is an eigenvalue, or one of them dwarfs the other): "
+                         f"{err}") from err
 
 
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
     r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise)."""
     lap = as_laplacian(lap)
+    g = as_signal(g, lap.n, "g", max_magnitude=np.inf)   # also the engine's intermediate vectors
+    backend = check_backend(backend)
     if lap.lumped:
         d = lap.B.diagonal()
-        return g / (d if g.ndim == 1 else d[:, None])
-    return shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
+        with np.errstate(over="ignore"):
+            u = g / (d if g.ndim == 1 else d[:, None])
+    else:
+        u = shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
+    return check_finite_result(u, "B^-1 g", "g is too large for the masses (rescale it)")
 
 
 def grounded_vertices(lap: Laplacian) -> np.ndarray:
