@@ -35,3 +35,23 @@ def test_generator_and_validation():
         sig.tetrahedralize(V, F, edge_length_fac=2.0)
     with pytest.raises(ValueError, match="V"):
         sig.tetrahedralize(V * np.nan, F)
+
+
+def test_a_surface_ftetwild_cannot_finish_is_refused_after_the_timeout(tmp_path, monkeypatch):
+    """fTetWild runs without end on some self-intersecting surfaces (faces of a sphere
+    pointing at shifted vertices); it runs in a child process, so that ends in a ValueError
+    and leaves the caller's working directory alone."""
+    import time
+
+    from data_generators import icosphere
+
+    V, F = icosphere(2)
+    bad = np.r_[np.ones((3, 3)), V]          # F now points at the wrong vertices
+    monkeypatch.chdir(tmp_path)
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match="did not finish in 3 s"):
+        sig.tetrahedralize(bad, F, edge_length_fac=0.2, timeout=3)
+    assert time.perf_counter() - start < 30
+    assert list(tmp_path.iterdir()) == []    # no scratch file left in the working directory
+    Vt, T = sig.tetrahedralize(V, F, edge_length_fac=0.2, timeout=120)
+    assert T.shape[1] == 4 and np.all(np.isfinite(Vt))

@@ -14,7 +14,8 @@ MIN_EDGE_FAC = 5e-3
 
 
 def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: float | None = None,
-                   epsilon: float = 1e-3, optimize: bool = True, quiet: bool = True):
+                   epsilon: float = 1e-3, optimize: bool = True, quiet: bool = True,
+                   timeout: float | None = 600.0):
     r"""Tetrahedral mesh of the volume enclosed by a surface, through fTetWild.
 
     fTetWild is robust to imperfect input (small gaps, self-intersections, several
@@ -34,6 +35,11 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
         Envelope size relative to the bounding-box diagonal.
     optimize : bool
         Improve element quality (slower).
+    timeout : float or None
+        Seconds fTetWild may run (default 600; None: no limit). It runs in a child
+        process with its own scratch directory, so a surface it cannot finish (some
+        self-intersecting inputs) ends in a ``ValueError`` instead of a hang, a crash inside
+        it cannot take the caller down, and the caller's working directory is never changed.
     quiet : bool
         Silence fTetWild's log.
 
@@ -71,21 +77,11 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
         remap = np.full(V.shape[0], -1, dtype=np.int64)
         remap[used] = np.arange(used.size)
         V, F = np.ascontiguousarray(V[used]), remap[F]
-    import os
-    import tempfile
-
-    import pytetwild
-
-    # fTetWild writes a scratch file (__tracked_surface.stl) into the working directory
-    cwd = os.getcwd()
-    with tempfile.TemporaryDirectory() as scratch:
-        os.chdir(scratch)
-        try:
-            Vt, T = pytetwild.tetrahedralize(V, F.astype(np.int32), edge_length_fac=edge_length_fac,
-                                             edge_length_abs=edge_length_abs, epsilon=epsilon,
-                                             optimize=bool(optimize), quiet=bool(quiet))
-        finally:
-            os.chdir(cwd)
+    if timeout is not None:
+        timeout = as_positive(timeout, "timeout")
+    Vt, T = _run_tetwild(V, F.astype(np.int32), timeout,
+                         dict(edge_length_fac=edge_length_fac, edge_length_abs=edge_length_abs,
+                              epsilon=epsilon, optimize=bool(optimize), quiet=bool(quiet)))
     Vt = np.ascontiguousarray(Vt, dtype=np.float64)
     T = np.ascontiguousarray(T, dtype=np.int64)
     if T.size == 0:
@@ -98,3 +94,51 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
     remap = np.full(Vt.shape[0], -1, dtype=np.int64)
     remap[used] = np.arange(used.size)
     return Vt[used], remap[T]
+
+
+def _tetwild_child(conn, V, F, kwargs):
+    """Run fTetWild in a scratch directory of this (child) process; send (Vt, T, error)."""
+    import os
+    import tempfile
+
+    try:
+        import pytetwild
+
+        with tempfile.TemporaryDirectory() as scratch:
+            os.chdir(scratch)      # fTetWild writes __tracked_surface.stl into the working directory
+            Vt, T = pytetwild.tetrahedralize(V, F, **kwargs)
+        conn.send((np.asarray(Vt), np.asarray(T), None))
+    except BaseException as exc:  # reported to the parent, which raises
+        conn.send((None, None, f"{type(exc).__name__}: {exc}"))
+    finally:
+        conn.close()
+
+
+def _run_tetwild(V, F, timeout, kwargs):
+    """fTetWild in a child process: (Vt, T), or a ValueError after ``timeout`` seconds."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_tetwild_child, args=(send, V, F, kwargs), daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if not recv.poll(timeout):
+            proc.kill()
+            raise ValueError(f"fTetWild did not finish in {timeout:g} s: the surface may self-intersect "
+                             "or be far from closed; repair it, or pass a larger timeout (None: no limit)")
+        try:
+            Vt, T, err = recv.recv()
+        except EOFError:
+            proc.join(5)
+            raise ValueError(f"fTetWild stopped without a result (exit code {proc.exitcode}); "
+                             "the surface is probably degenerate") from None
+    finally:
+        recv.close()
+        proc.join(5)
+        if proc.is_alive():
+            proc.kill()
+    if err is not None:
+        raise ValueError(f"fTetWild failed: {err}")
+    return Vt, T
