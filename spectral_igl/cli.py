@@ -122,10 +122,11 @@ def _input_args(p, outputs=_OUTPUTS):
     p.add_argument("--level", type=int, default=3,
                    help="resolution of the generated shape, 1 to 7 (sphere: icosphere "
                         "subdivisions, 642 vertices at 3; default 3)")
-    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"),
-                   help="Laplacian weights (default cotan: linear FEM)")
-    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"),
-                   help="mass matrix (default full: linear FEM)")
+    p.add_argument("--weights", default="auto", choices=("auto", "cotan", "intrinsic_delaunay", "uniform"),
+                   help="Laplacian weights (default auto: intrinsic Delaunay for triangles, cotan "
+                        "for tets)")
+    p.add_argument("--mass", default="lumped", choices=("lumped", "full", "barycentric"),
+                   help="mass matrix (default lumped: with auto weights the heat stays non-negative)")
     p.add_argument("-o", "--out", action="append", default=[], metavar="FILE",
                    help=f"write the result; type by extension ({', '.join(outputs)}); repeatable")
     p.add_argument("-q", "--quiet", action="store_true",
@@ -424,7 +425,7 @@ def _job_kernel_distance(args):
            title=f"{ev.label} ({name})", names=[f"{args.filter}_{args.job}"])
     prog.update()
     prog.close()
-    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g}"
+    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g} ({ev.bound_kind})"
     _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
                f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; error bound {bound}; "
                f"{ev.seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
@@ -652,8 +653,8 @@ def _batch_arguments(sub):
                    help="eigenvalues: how many (default 20); wks: eigenpairs (default 100)")
     p.add_argument("--method", default="auto", help="diagonal method (default auto; wks: eigen)")
     p.add_argument("--tol", type=_positive, default=1e-8)
-    p.add_argument("--weights", default="cotan", choices=("cotan", "intrinsic_delaunay", "uniform"))
-    p.add_argument("--mass", default="full", choices=("full", "lumped", "barycentric"))
+    p.add_argument("--weights", default="auto", choices=("auto", "cotan", "intrinsic_delaunay", "uniform"))
+    p.add_argument("--mass", default="lumped", choices=("lumped", "full", "barycentric"))
     p.add_argument("--workers", type=_positive_int, default=None,
                    help="local worker processes (default: one per core)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,

@@ -115,7 +115,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
         distance was recomputed exactly as a norm), ``unverified`` and, for one-to-all,
         ``d2_error_bound`` (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the
-        diagonal is exact; then :math:`|d - \tilde d| \le` its square root).
+        diagonal is exact; then :math:`|d - \tilde d| \le` its square root) and its
+        ``bound_kind`` (``"proof"`` or ``"estimate"``).
     progress : bool, optional
         One-to-all: a progress bar on stderr over the diagonal's poles or blocks (see
         :mod:`spectral_igl.progress`; default off).
@@ -177,6 +178,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
             col = lap.mass * kern.columns(e * lap.mass[:, None])[:, 0]
             bound = bound * lap.mass ** 2
         err = 2.0 * (bound + bound[s])
+        info["bound_kind"] = kern.bound_kind
     else:
         op2 = spectral_operator(lap, G2, method, tol)
         col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
@@ -194,6 +196,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         fac = 1.0 if lap.lumped else 5.0
         cerr = col_bound * np.sqrt(fac * minv * minv[s]) if delta == "mass" else 0.0
         err = 2.0 * derr + 2.0 * cerr
+        proved = dinfo.get("bound_kind") == "proof" and op2.bound_kind == "proof"
+        info["bound_kind"] = "proof" if proved else "estimate"
     d2 = diag[s] + diag - 2.0 * col
     d2[s] = 0.0
     # plus the rounding of the cancellation

@@ -56,9 +56,10 @@ def uses_time(quantity: str, filter: str) -> bool:
 class Evaluation:
     """Values on the vertices with the certified error bound and the wall time."""
 
-    def __init__(self, values, error_bound, seconds, label):
+    def __init__(self, values, error_bound, seconds, label, bound_kind=None):
         self.values = values
         self.error_bound = error_bound
+        self.bound_kind = bound_kind
         self.seconds = seconds
         self.label = label
 
@@ -106,7 +107,7 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         ``values`` (n,) float (the real part for the complex wave filter), ``error_bound``
         (absolute: in the B-norm for a kernel column, the largest bound on
         :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
-        ``seconds``.
+        ``seconds``, ``bound_kind`` (``"proof"``, ``"estimate"``, or ``None`` without a bound).
     """
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
@@ -127,15 +128,16 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         e[source] = 1.0
         values = op.apply_inverse_mass(e)
         bound = _bound(op.error_bound)
+        kind = op.bound_kind if bound is not None else None
         values = np.real(values) if np.iscomplexobj(values) else values
     else:
-        values, bound = _distance(lap, filt, source, method, tol, diagonal)
+        values, bound, kind = _distance(lap, filt, source, method, tol, diagonal)
     seconds = time.perf_counter() - start
-    return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label)
+    return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label, kind)
 
 
 def _distance(lap, filt, source, method, tol, diagonal="auto"):
-    """Distances from ``source`` and a bound on each |d - d~| (``None`` when there is none).
+    """Distances from ``source``, a bound on each |d - d~| (``None`` when there is none) and its kind.
 
     For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``
     with ``e`` the bound on the squared distances.
@@ -145,7 +147,7 @@ def _distance(lap, filt, source, method, tol, diagonal="auto"):
     out = np.asarray(out)
     e = info.get("d2_error_bound")
     if e is None or not np.isfinite(e):
-        return out, None
+        return out, None, None
     d = np.delete(np.abs(out), source)
     per = np.minimum(np.sqrt(e), e / np.maximum(d, np.finfo(float).tiny))
-    return out, float(per.max(initial=0.0))
+    return out, float(per.max(initial=0.0)), info.get("bound_kind", "estimate")

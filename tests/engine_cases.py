@@ -10,7 +10,7 @@ HEAT_TIMES = [1e-5, 1e-3, 1e-1, 10.0]
 def two_spheres():
     V, F = icosphere(2)
     V2 = V * 0.5 + np.array([3.0, 0, 0])
-    return sig.laplacian(np.vstack([V, V2]), np.vstack([F, F + len(V)]))
+    return sig.laplacian(np.vstack([V, V2]), np.vstack([F, F + len(V)]), mass="full")
 
 
 def unit_area(lap_fn, V, F, **kw):
@@ -20,9 +20,9 @@ def unit_area(lap_fn, V, F, **kw):
 
 
 SHAPES = {
-    "sphere": lambda: unit_area(sig.laplacian, *icosphere(3)),
+    "sphere": lambda: unit_area(sig.laplacian, *icosphere(3), mass="full"),
     "sphere_lumped": lambda: unit_area(sig.laplacian, *icosphere(3), mass="lumped"),
-    "box_tets": lambda: sig.laplacian(*box_tets((7, 5, 4))),
+    "box_tets": lambda: sig.laplacian(*box_tets((7, 5, 4)), mass="full"),
     "two_spheres": two_spheres,
 }
 _cache = {}

@@ -8,7 +8,7 @@ from data_generators import box_eigenvalues, box_tets, icosphere, sphere_eigenva
 
 def test_single_triangle_matrices():
     V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
-    lap = sig.laplacian(V, np.array([[0, 1, 2]]))
+    lap = sig.laplacian(V, np.array([[0, 1, 2]]), weights="cotan", mass="full")
     # right angle at vertex 0: cot(90°)=0 on edge (1,2); cot(45°)=1 on edges (0,1), (0,2)
     L = np.array([[1.0, -0.5, -0.5], [-0.5, 0.5, 0.0], [-0.5, 0.0, 0.5]])
     assert np.allclose(lap.L.toarray(), L, atol=1e-15)
@@ -17,7 +17,7 @@ def test_single_triangle_matrices():
 
 def test_single_tet_matrices():
     V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-    lap = sig.laplacian(V, np.array([[0, 1, 2, 3]]))
+    lap = sig.laplacian(V, np.array([[0, 1, 2, 3]]), mass="full")
     # P1 stiffness of the reference tet: grad φ0 = (-1,-1,-1), grad φk = e_k, volume 1/6
     G = np.array([[-1.0, -1, -1], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
     assert np.allclose(lap.L.toarray(), G @ G.T / 6, atol=1e-14)

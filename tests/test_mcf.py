@@ -47,7 +47,7 @@ def test_round_sphere_is_a_fixed_point():
 def test_one_step_is_the_backward_euler_system():
     V, F = icosphere(2)
     V = V * [1.3, 1.0, 0.7]
-    lap = sig.laplacian(V, F, mass="barycentric")
+    lap = sig.laplacian(V, F, weights="cotan", mass="barycentric")
     delta = 1e-3 * lap.area()
     import scipy.sparse.linalg as spla
 

@@ -14,7 +14,7 @@ pytestmark = pytest.mark.skipif(not available(), reason="compiled LDLT or pymeti
 
 @pytest.fixture(scope="module")
 def lap_torus():
-    return sig.laplacian(*torus(20, 10, jitter=0.3, seed=3))
+    return sig.laplacian(*torus(20, 10, jitter=0.3, seed=3), mass="full")
 
 
 @pytest.fixture(scope="module")
@@ -93,14 +93,22 @@ def test_selinv_is_what_auto_uses_and_falls_back(lap_torus):
     lap = lap_torus
     _, info = sig.kernel_diagonal(lap, F.heat(0.1), return_info=True)
     assert info["method"] == "selinv"
-    # s^-3 has no rational fit with poles away from 0: auto falls back, selinv refuses
+    # s^-3 (the poly-harmonic k = 3 distance): the circle rule on the resolvent, exact up to
+    # a proved relative aliasing error
     poly3 = F.polyharmonic(3).square
     d, info = sig.kernel_diagonal(lap, poly3, return_info=True)
-    assert info["method"] == "dense"
+    assert info["method"] == "selinv" and info["bound_kind"] == "proof"
     ref = np.diag(dense_kernel(lap, lambda s: np.where(s > 0, s ** -3.0, 0.0), True))
+    assert np.abs(d - ref).max() <= info["abs_error_bound"] + 1e-13 * ref.max()
+    assert info["abs_error_bound"] <= 1e-10 * ref.max()
+    # s^-2.5 has no rational fit with poles away from 0: auto falls back, selinv refuses
+    poly5 = F.polyharmonic(5)
+    d, info = sig.kernel_diagonal(lap, poly5, return_info=True)
+    assert info["method"] == "dense"
+    ref = np.diag(dense_kernel(lap, lambda s: np.where(s > 0, s ** -2.5, 0.0), True))
     assert np.abs(d - ref).max() <= 1e-8 * ref.max()
     with pytest.raises(ValueError, match="selinv"):
-        sig.kernel_diagonal(lap, poly3, method="selinv")
+        sig.kernel_diagonal(lap, poly5, method="selinv")
     with pytest.raises(ValueError, match="seed"):   # B G B needs a diagonal B
         sig.kernel_diagonal(lap, F.heat(0.1), method="selinv", delta="seed")
 

@@ -1,16 +1,35 @@
 r"""Spectrum-free evaluation of :math:`\varphi(\tilde L) f`, :math:`\tilde L = B^{-1}L`, with a certified bound.
 
-Every method replaces φ by a scalar approximation r on an interval :math:`[a, \lambda_{\max}]`
-that contains the spectrum (``a = 0``; for filters singular at 0, ``a`` is a lower bound of
-the smallest positive eigenvalue and the filter acts on the B-orthogonal complement of
-ker L). Since :math:`\tilde L` is self-adjoint in the B-inner product,
+The kernel of L (the constants of each connected component) is split off exactly: with
+:math:`P_0 = ZZ^\top B` the B-orthogonal projector onto ker L,
 
-.. math:: \|\varphi(\tilde L)f - r(\tilde L)f\|_B \le \max_{s \in [a, \lambda_{\max}]}
-          |\varphi(s) - r(s)| \, \|f\|_B,
+.. math:: \varphi(\tilde L)f = \varphi(0)\,P_0 f + \varphi(\tilde L)(f - P_0 f),
 
-and that number (plus a rounding term for the solves) is reported as ``error_bound``.
-The Lanczos methods report their a-priori bound
-:math:`2\min_{p}\max|g - p|\,\|f\|_B` instead (see :mod:`.krylov`).
+and every spectrum-free method replaces φ by a scalar approximation r on
+:math:`[a, \lambda_{\max}]` and the remainder is projected back onto the complement of
+ker L. a = :func:`~spectral_igl.linalg.lambda_min_positive` (a certified lower bound of the
+smallest positive eigenvalue) for the singular filters, and for the heat and Mexican-hat
+filters once :math:`t\lambda_{\max}` exceeds :data:`LARGE_T`; a = 0 otherwise (the
+remainder has no component in ker L, so [0, λ_max] encloses its spectrum too). So the heat at any large t tends to the projection onto
+the constants of each component, and the approximation never has to resolve φ near 0. When
+:math:`\max_{[a, \lambda_{\max}]}|\varphi| \le` ``tol``/2 (heat at large t), the remainder is
+dropped and that maximum is the bound. Since :math:`\tilde L` is self-adjoint in the B-inner
+product,
+
+.. math:: \|\varphi(\tilde L)f - u\|_B \le \max_{s \in [a, \lambda_{\max}]}
+          |\varphi(s) - r(s)| \, \|f - P_0 f\|_B + \text{rounding},
+
+and that number is reported as ``error_bound``. The Lanczos methods report their a-priori
+bound :math:`2\min_{p}\max|g - p|\,\|f - P_0f\|_B` instead (see :mod:`.krylov`).
+
+``bound_kind`` says whether the bound is a proof: ``"proof"`` when both ends of the
+spectrum's enclosure are certified (:func:`~spectral_igl.laplacian.lambda_max_kind`,
+:func:`~spectral_igl.linalg.lambda_min_positive_kind`) and the scalar error is proved
+(:func:`.common.certified_sup`, :func:`.common.ellipse_tails`, the Lagrange remainder);
+``"estimate"`` otherwise (a user filter, ``"power"``'s sampled error, ``"dense"``'s rounding
+model, a non-FEM mass matrix). ``bound_parts`` gives each ingredient's kind; the rounding of
+the solves is an a-priori allowance except for the pseudo-solves of ``"rational"``, which
+use a-posteriori residuals.
 
 Methods
 -------
@@ -38,9 +57,9 @@ import scipy.sparse.linalg as spla
 
 from .._validate import as_int, as_positive, as_signal, as_tol, check_spectral_function
 from ..filters import Filter, as_filter
-from ..laplacian import Laplacian, as_laplacian, lambda_max
-from ..linalg import check_backend, lambda_min_positive
-from .common import bnorm, inv_bnorm_upper
+from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind
+from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
+from .common import EPS, bnorm, certified_sup, filter_d2, inv_bnorm_upper, sup_error
 from .contour import ContourPlan
 from .krylov import KrylovPlan, ShiftInvertPlan
 from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
@@ -69,6 +88,10 @@ _PLANS = {
 METHODS = ("auto",) + tuple(_PLANS)
 #: Methods that approximate the heat filter only.
 HEAT_ONLY = ("euler", "taylor1", "power", "contour")
+#: above this t * lambda_max, decaying filters (heat, Mexican hat) are approximated on
+#: [lambda_min_positive, lambda_max] (one more factorization, cached), and dropped where
+#: they are below tol/2 there; below it, on [0, lambda_max]
+LARGE_T = 1e6
 
 
 def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
@@ -178,8 +201,15 @@ class SpectralOperator(spla.LinearOperator):
     method : str
         The method in use (``"auto"`` resolved).
     error_bound : float, (k,) float array, or None
-        Certified absolute B-norm error of the last call (per column for (n, k) input).
+        Absolute B-norm error bound of the last call (per column for (n, k) input).
         ``None`` for ``"eigen"``, which cannot bound its truncation error.
+    bound_kind : {"proof", "estimate"} or None
+        Whether ``error_bound`` is a mathematical upper bound of the error (see the module
+        notes); ``None`` for ``"eigen"``.
+    bound_parts : dict
+        The kind of each ingredient: ``lambda_max``, ``lambda_min_positive``,
+        ``approximation`` (``"proof"``/``"estimate"``) and ``rounding`` (``"a-priori"`` or
+        ``"residual"``).
     n_solves : int
         Sparse solves per right-hand side (excluding one-off factorizations).
 
@@ -214,19 +244,57 @@ class SpectralOperator(spla.LinearOperator):
                              "use 'rational', 'chebyshev', 'shift_invert' or 'krylov'")
         self.lap, self.filter, self.method, self.tol = lap, filt, method, tol
         self.lambda_max = lambda_max(lap)
-        self.a = lambda_min_positive(lap) if filt.singular else 0.0
+        self.split = method not in ("dense", "eigen")
+        t = filt.params.get("t") if filt.kind in ("heat", "mexican_hat") else None
+        decays = self.split and t is not None and t * self.lambda_max > LARGE_T
+        self.a = lambda_min_positive(lap) if (filt.singular or decays) else 0.0
+        if self.a >= self.lambda_max:          # only isolated vertices, or a 1-edge mesh
+            self.a = 0.5 * self.lambda_max
         kwargs = dict(options)
         if method not in ("dense", "eigen"):
             kwargs["backend"] = backend
-        try:
-            self.plan = _PLANS[method](lap, filt, self.a, self.lambda_max, tol, **kwargs)
-        except TypeError as err:
-            raise TypeError(f"invalid options for method {method!r}: {sorted(options)} ({err})") from err
+        self.plan = None
+        if self.split:
+            self.plan = ZeroPlan.attempt(filt, self.a, self.lambda_max, tol)
+        if self.plan is None:
+            try:
+                self.plan = _PLANS[method](lap, filt, self.a, self.lambda_max, tol, **kwargs)
+            except TypeError as err:
+                raise TypeError(f"invalid options for method {method!r}: {sorted(options)} ({err})") from err
+        self.phi0 = filt.at_zero()
+        scal = getattr(self.plan, "scalar_error", 0.0)
+        if scal is None or not np.isfinite(scal):
+            raise ValueError(f"method {method!r} cannot bound its error for {filt!r} on the spectrum "
+                             f"[{self.a:.3g}, {self.lambda_max:.3g}] (t * lambda_max too large for it); "
+                             "use method='rational', 'krylov' or 'chebyshev', or a smaller t")
+        self._enclosure = {"lambda_max": lambda_max_kind(lap),
+                           "lambda_min_positive": (lambda_min_positive_kind(lap) if self.a > 0 else "unused")}
         self.n_solves = getattr(self.plan, "n_solves", None)
         self.error_bound = None
         pf = getattr(self.plan, "pf", None)
         log.debug("%s: %s solves per column, degree %s, poles %s", self, self.n_solves,
                   getattr(self.plan, "m", None), None if pf is None else [z for _, z, _ in pf.terms])
+
+    @property
+    def bound_parts(self) -> dict:
+        """The kind of each ingredient of ``error_bound`` (see the module notes)."""
+        if self.method == "eigen":
+            return {}
+        if self.method == "dense":   # exact up to the eigensolver's rounding, not certified
+            return {"lambda_max": "unused", "lambda_min_positive": "unused",
+                    "approximation": "estimate", "rounding": "a-priori"}
+        return dict(self._enclosure,
+                    approximation="proof" if getattr(self.plan, "proved", False) else "estimate",
+                    rounding="residual" if (self.method == "rational" and self.filter.kind == "power"
+                                            and getattr(self.plan, "pf", None) is None) else "a-priori")
+
+    @property
+    def bound_kind(self):
+        """``"proof"`` or ``"estimate"`` (``None`` for ``"eigen"``): see the module notes."""
+        if self.method == "eigen":
+            return None
+        ok = all(v in ("proof", "unused", "a-priori", "residual") for v in self.bound_parts.values())
+        return "proof" if ok else "estimate"
 
     def _matvec(self, x):
         return self.apply(np.asarray(x).reshape(-1))
@@ -267,15 +335,21 @@ class SpectralOperator(spla.LinearOperator):
     def _apply(self, f, rhs):
         lap = self.lap
         f = as_signal(f, lap.n, "g" if rhs else "f")
-        if self.filter.singular:
+        kernel_part = None
+        if self.filter.singular or self.split:
             Z = lap.component_basis()
-            if rhs:
-                f = f - lap.B @ (Z @ (Z.T @ f))
-            else:
-                f = lap.project_out_kernel(f)
+            c0 = Z.T @ f if rhs else Z.T @ (lap.B @ f)       # P0 f = Z c0 (P0 B^-1 g for rhs)
+            f = f - lap.B @ (Z @ c0) if rhs else f - Z @ c0
+            if self.split and self.phi0 != 0:
+                kernel_part = Z @ (self.phi0 * c0)
         u, src, scal = self.plan.apply(f, rhs)
-        if self.filter.singular:
+        if self.filter.singular or self.split:
             u = lap.project_out_kernel(u)
+        if kernel_part is not None:
+            u = u + kernel_part
+        if not np.all(np.isfinite(u)):
+            raise ValueError(f"method {self.method!r} overflowed for {self.filter!r} "
+                             f"(lambda_max = {self.lambda_max:.3g}); use method='rational' or 'krylov'")
         if scal is None:
             self.error_bound = None
         else:
@@ -286,11 +360,42 @@ class SpectralOperator(spla.LinearOperator):
             else:
                 norm = inv_bnorm_upper(lap, f)
             bound = scal * norm + getattr(self.plan, "residual_bound", 0.0)
+            if kernel_part is not None:    # rounding of the exact kernel part (sums of n terms)
+                bound = bound + (8.0 + 2.0 * np.sqrt(lap.n)) * EPS * bnorm(lap, kernel_part)
             bound = np.asarray(bound, dtype=float)
+            if not np.all(np.isfinite(bound)):
+                raise ValueError(f"method {self.method!r} cannot bound its error for {self.filter!r} on "
+                                 f"[{self.a:.3g}, {self.lambda_max:.3g}]; use method='rational' or "
+                                 "'krylov', or a smaller t")
             self.error_bound = float(bound) if f.ndim == 1 else np.broadcast_to(bound, f.shape[1:]).copy()
         if not self.filter.is_complex and np.isrealobj(f) and np.iscomplexobj(u):
             u = u.real
         return u
+
+
+class ZeroPlan:
+    r"""The remainder dropped: when :math:`\max_{[a, b]}|\varphi| \le` tol/2 (heat at large t,
+    for example), :math:`\varphi(\tilde L)(f - P_0f)` is within that maximum of 0."""
+
+    n_solves = 0
+
+    def __init__(self, bound, proved):
+        self.scalar_error, self.proved, self.m = bound, proved, 0
+
+    @classmethod
+    def attempt(cls, filt, a, b, tol):
+        d2 = filter_d2(filt)
+        with np.errstate(all="ignore"):
+            if d2 is not None:
+                top = certified_sup(lambda s: (filt(s), np.abs(filt(s))), d2, a, b, tol, n=200)
+            else:
+                top = sup_error(filt, a, b, n=500)
+        if np.isfinite(top) and top <= 0.5 * tol:
+            return cls(float(top), d2 is not None)
+        return None
+
+    def apply(self, f, rhs):
+        return np.zeros_like(f), (None if rhs else f), self.scalar_error
 
 
 def apply_filter(lap: Laplacian, filt, f, method: str = "auto", tol: float = 1e-8, **options):

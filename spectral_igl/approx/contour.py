@@ -13,8 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import sup_error
-from .rational import PartialFractions, rounding
+from .rational import PartialFractions, certify, rounding
 
 
 def talbot(N: int):
@@ -32,11 +31,12 @@ class ContourPlan:
     def __init__(self, lap, filt, a, b, tol, nodes=None, backend="auto"):
         t = filt.params["t"]
         self.lap, self.backend = lap, backend
+        self.proved = True
         Ns = [int(nodes)] if nodes is not None else range(4, 41, 2)
         for N in Ns:
             z, w = talbot(N)
             pf = PartialFractions(0.0, w, -z, sigma=t)
-            err = sup_error(lambda s: filt(s) - pf(s), a, b, scale=1.0)
+            err = certify(pf, filt, a, b, tol)
             rnd = rounding(pf, a, b, b)
             if err + rnd <= tol:
                 break

@@ -26,20 +26,33 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..linalg import mass_solve, shifted_factor
-from .common import EPS, cheb_adaptive, tail_sums
+from .common import EPS, cheb_adaptive, ellipse_tails, filter_logmax, tail_sums
 
 
-def _cheb_steps(g, lo, hi, tol, max_steps):
-    """Smallest m with 2 * (Chebyshev tail of g beyond degree m-1 + aliasing) <= tol."""
+def _cheb_steps(g, lo, hi, tol, max_steps, logmax=None):
+    """Smallest m with 2 * (Chebyshev tail of g beyond degree m-1) <= tol.
+
+    With ``logmax`` (log of a bound of |g| on the Bernstein ellipses of [lo, hi]) the tails
+    are proved (:func:`.common.ellipse_tails`); when the proved tail does not reach ``tol``
+    within ``max_steps``, or without ``logmax``, the sampled tail plus an aliasing allowance
+    is used (an estimate). Returns ``(m, bound, scale, proved)``.
+    """
     c, _ = cheb_adaptive(g, lo, hi, max_degree=max(128, 2 * max_steps))
     M = c.size - 1
+    scale = float(np.max(np.abs(c)))
+    if logmax is not None:
+        bound = 2.0 * ellipse_tails(logmax, np.arange(1, M + 2) - 1.0)
+        ok = np.flatnonzero(bound[:max_steps] <= tol)
+        if ok.size:
+            m = int(ok[0]) + 1
+            return m, float(bound[m - 1]), scale, True
     alias = 2.0 * float(np.sum(np.abs(c[-(M // 8):])))
     tails = tail_sums(c)  # tails[m] = error of degree m-1 truncation
     bound = 2.0 * (tails[1:] + alias)  # index m-1 -> m steps
     ok = np.flatnonzero(bound <= tol)
     m = int(ok[0]) + 1 if ok.size else min(M, max_steps)
     m = min(m, max_steps)
-    return m, float(bound[m - 1]), float(np.max(np.abs(c)))
+    return m, float(bound[m - 1]), scale, False
 
 
 def lanczos(op, f, Bf, m, lap):
@@ -107,11 +120,13 @@ class KrylovPlan:
 
     def __init__(self, lap, filt, a, b, tol, steps=None, max_steps=3000, backend="auto"):
         self.lap, self.filt, self.a, self.b, self.backend = lap, filt, a, b, backend
+        logmax = filter_logmax(filt, a, b)
+        self.proved = False
         if steps is None:
-            m, err, scale = _cheb_steps(filt, a, b, tol, max_steps)
+            m, err, scale, self.proved = _cheb_steps(filt, a, b, tol, max_steps, logmax)
         else:
             m = int(steps)
-            _, _, scale = _cheb_steps(filt, a, b, 0.0, max(m, 2))
+            _, _, scale, _ = _cheb_steps(filt, a, b, 0.0, max(m, 2))
             c, _ = cheb_adaptive(filt, a, b, max_degree=max(128, 2 * m))
             M = c.size - 1
             err = 2.0 * (tail_sums(c)[min(m, M + 1)] + 2.0 * float(np.sum(np.abs(c[-(M // 8):]))))
@@ -126,8 +141,8 @@ class KrylovPlan:
             f = mass_solve(lap, f, backend=self.backend)
         F = f.reshape(f.shape[0], -1)
 
-        def op(v):
-            return mass_solve(lap, lap.L @ v, backend=self.backend)
+        def op(v):   # on the complement of ker L (kept there against rounding)
+            return lap.project_out_kernel(mass_solve(lap, lap.L @ v, backend=self.backend))
 
         al, be, Q, b0, me = lanczos(op, F, lap.B @ F, self.m, lap)
         out = lanczos_eval(self.filt, al, be, Q, b0, me, self.a, self.b,
@@ -148,17 +163,18 @@ class ShiftInvertPlan:
         for gam in cands:
             lo, hi = 1.0 / (1.0 + gam * b), 1.0 / (1.0 + gam * a)
             g = self._g(gam)
+            proved = False
             if steps is None:
-                m, err, scale = _cheb_steps(g, lo, hi, tol, max_steps)
+                m, err, scale, proved = _cheb_steps(g, lo, hi, tol, max_steps, self._logmax(gam, lo, hi))
             else:
                 m = int(steps)
                 c, _ = cheb_adaptive(g, lo, hi, max_degree=max(128, 2 * m))
                 M = c.size - 1
                 err = 2.0 * (tail_sums(c)[min(m, M + 1)] + 2.0 * float(np.sum(np.abs(c[-(M // 8):]))))
                 scale = float(np.max(np.abs(c)))
-            if best is None or (m, err) < (best[0], best[1]):
-                best = (m, err, scale, gam)
-        self.m, self.scalar_error, scale, self.gamma = best
+            if best is None or (not proved, m, err) < (not best[4], best[0], best[1]):
+                best = (m, err, scale, gam, proved)
+        self.m, self.scalar_error, scale, self.gamma, self.proved = best
         self.rounding = 64 * EPS * self.m * scale
         self.lo, self.hi = 1.0 / (1.0 + self.gamma * b), 1.0 / (1.0 + self.gamma * a)
         self.n_solves = self.m
@@ -176,6 +192,48 @@ class ShiftInvertPlan:
             base += [t * c for c in (0.25, 0.5, 1.0, 2.0)]
         return base
 
+    def _logmax(self, gam, lo, hi, divide=False):
+        r"""For the heat filter, log of a bound of :math:`|g|` (or :math:`|g(y)/y|`) on the
+        Bernstein ellipse :math:`E_\rho` of [lo, hi]; None for other filters.
+
+        :math:`|g(y)| = e^{q(1 - \mathrm{Re}(1/y))}` with :math:`q = t/\gamma`. On
+        :math:`y = c + A u + iB\sqrt{1-u^2}`, :math:`\mathrm{Re}(1/y) = (c + Au)/Q(u)` with the
+        quadratic :math:`Q(u) = |y|^2 = d^2u^2 + 2cAu + c^2 + B^2`, so its minimum over
+        :math:`u \in [-1, 1]` is attained at ±1 or at a root of the quadratic
+        :math:`Ad^2u^2 + 2cd^2u + A(c^2 - B^2)` (the zero of the derivative): exact, no sampling.
+        Only ellipses with y = 0 outside (c - A > 0) are used.
+        """
+        if self.filt.kind != "heat":
+            return None
+        q = self.filt.params["t"] / gam
+        c, d = 0.5 * (lo + hi), 0.5 * (hi - lo)
+
+        def lm(rho):
+            A, Bm = d * 0.5 * (rho + 1.0 / rho), d * 0.5 * (rho - 1.0 / rho)
+            if not c - A > 0:      # y = 0 (the essential singularity) must lie outside E_rho
+                return np.inf
+            d2 = d * d
+            us = [-1.0, 1.0]
+            qa, qb, qc = A * d2, 2.0 * c * d2, A * (c * c - Bm * Bm)
+            disc = qb * qb - 4.0 * qa * qc
+            if qa > 0 and disc >= 0:
+                us += [(-qb + sg * np.sqrt(disc)) / (2.0 * qa) for sg in (-1.0, 1.0)]
+            us = np.array([u for u in us if -1.0 <= u <= 1.0])
+
+            def Q(u):
+                return d2 * u * u + 2.0 * c * A * u + c * c + Bm * Bm
+
+            uq = np.clip(-c * A / d2, -1.0, 1.0) if d2 > 0 else -1.0
+            qmin = min(Q(uq), Q(-1.0), Q(1.0))
+            if not qmin > 1e-300:
+                return np.inf
+            fmin = float(np.min((c + A * us) / Q(us)))
+            val = q * (1.0 - fmin)
+            if divide:
+                val -= 0.5 * np.log(qmin)
+            return val * (1.0 + 1e-12) + 1e-12 * (1.0 + q)
+        return lm
+
     def _g(self, gam, divide=False):
         filt = self.filt
 
@@ -191,14 +249,16 @@ class ShiftInvertPlan:
         fac = shifted_factor(lap, self.gamma, 1.0, backend=self.backend)
         F = f.reshape(f.shape[0], -1)
 
-        def op(v):
-            return fac.solve(lap.B @ v)
+        def op(v):   # on the complement of ker L (kept there against rounding)
+            return lap.project_out_kernel(fac.solve(lap.B @ v))
 
         if rhs:
             # φ(L̃)B⁻¹g = h(A) (A B⁻¹ g), h(y) = g(y)/y, A B⁻¹ g = (B + γL)⁻¹ g
             if self._rhs_plan is None:
                 h = self._g(self.gamma, divide=True)
-                m, err, scale = _cheb_steps(h, self.lo, self.hi, self.tol, 400)
+                m, err, scale, proved = _cheb_steps(h, self.lo, self.hi, self.tol, 400,
+                                                    self._logmax(self.gamma, self.lo, self.hi, divide=True))
+                self.proved = self.proved and proved
                 self._rhs_plan = (h, m, err, 64 * EPS * m * scale)
             h, m, err, rnd = self._rhs_plan
             F0 = fac.solve(F)

@@ -12,20 +12,28 @@ import math
 import numpy as np
 
 from ..linalg import mass_solve, shifted_factor
-from .common import EPS, cheb_adaptive, sup_error, tail_sums
+from .common import EPS, cheb_adaptive, certified_sup, ellipse_tails, filter_logmax, sup_error, tail_sums
 
 
 def _ltilde(lap, v, backend):
-    return mass_solve(lap, lap.L @ v, backend=backend)
+    r""":math:`\tilde L v`, B-projected off ker L: the engine applies the approximations to
+    the complement of ker L only, and the rounding must not bring the kernel back (where
+    a Chebyshev recurrence mapped to :math:`[\lambda_{\min}^+, \lambda_{\max}]` would grow
+    exponentially)."""
+    return lap.project_out_kernel(mass_solve(lap, lap.L @ v, backend=backend))
 
 
 class ChebyshevPlan:
     r"""Chebyshev expansion :math:`p_m(s) = \sum_{k \le m} c_k T_k(\frac{2s - a - b}{b - a})`.
 
-    The degree m is the smallest whose coefficient tail :math:`\sum_{k > m} |c_k|`, plus an
-    allowance for the aliasing of the resolved interpolant, is below ``tol``; that sum is the
-    reported bound of :math:`\max_{[a,b]} |\varphi - p_m|`. Evaluation by the three-term
-    recurrence (numerically stable, unlike the monomial form).
+    The coefficients are those of the Chebyshev interpolant of degree M (resolved to about
+    machine precision). For the built-in filters the bound of
+    :math:`\max_{[a,b]} |\varphi - p_m|` is proved: the coefficient tail beyond m plus twice the
+    tail beyond M (the aliasing of the interpolant), both bounded from the maximum of φ on a
+    Bernstein ellipse (:func:`.common.ellipse_tails`); m is the smallest degree meeting
+    ``tol``. For a user filter the sampled tail plus an aliasing allowance is used (an
+    estimate). Evaluation by the three-term recurrence (numerically stable, unlike the
+    monomial form).
     """
 
     def __init__(self, lap, filt, a, b, tol, degree=None, max_degree=20000, backend="auto"):
@@ -35,6 +43,12 @@ class ChebyshevPlan:
         M = c.size - 1
         alias = 2.0 * float(np.sum(np.abs(c[-(M // 8):])))
         tails = tail_sums(c)
+        logmax = filter_logmax(fn, a, b)
+        self.proved = logmax is not None
+        if self.proved:   # proved tails beyond each degree, and the aliasing beyond M
+            tails = ellipse_tails(logmax, np.arange(M + 2) - 1.0)
+            alias = 2.0 * float(ellipse_tails(logmax, [M])[0])
+            tails = np.minimum(tails, tails[0])   # tails[j]: beyond degree j - 1
         if degree is None:
             ok = np.flatnonzero(tails[1:] + alias + 4 * EPS * np.arange(1, M + 2) * np.abs(c).sum() <= tol)
             m = int(ok[0]) if ok.size else M
@@ -54,7 +68,8 @@ class ChebyshevPlan:
         al, be = 2.0 / (b - a), -(a + b) / (b - a)
 
         def X(v):
-            return al * _ltilde(lap, v, self.backend) + be * v
+            # the whole step B-projected off ker L, where T_k would grow like (1.0 + 2a/(b - a))^k
+            return lap.project_out_kernel(al * mass_solve(lap, lap.L @ v, backend=self.backend) + be * v)
 
         c = self.c
         t0 = f
@@ -106,6 +121,7 @@ class TaylorPlan:
         self.lap, self.backend = lap, backend
         best = None
         degrees = [int(degree)] if degree is not None else range(1, max_degree + 1)
+        self.proved = True
         if filt.kind in ("heat", "wave"):
             x = filt.params["t"] * b
             remainder = lambda m: np.exp((m + 1) * np.log(x) - math.lgamma(m + 2)) if x > 0 else 0.0  # noqa: E731
@@ -114,6 +130,11 @@ class TaylorPlan:
             tails = tail_sums(c)
             M = c.size - 1
             alias = 2.0 * float(np.sum(np.abs(c[-(M // 8):])))
+            logmax = filter_logmax(filt, a, b)
+            self.proved = logmax is not None
+            if self.proved:
+                tails = ellipse_tails(logmax, np.arange(M + 2) - 1.0)
+                alias = 2.0 * float(ellipse_tails(logmax, [M])[0])
             remainder = lambda m: tails[min(m + 1, M + 1)] + alias  # noqa: E731
         for m in degrees:
             coef = _taylor_coeffs(filt, a, b, m)
@@ -148,15 +169,21 @@ class EulerPlan:
 
     def __init__(self, lap, filt, a, b, tol, steps=1, backend="auto"):
         t = filt.params["t"]
+        tol = float(tol)
         self.lap, self.t, self.m, self.backend = lap, t, int(steps), backend
         if self.m < 1:
             raise ValueError(f"steps must be a positive integer, got {steps}")
         m = self.m
 
-        def r(s):
-            return (1.0 + t * s / m) ** (-m)
+        def err(s):
+            r = (1.0 + t * s / m) ** (-m)
+            return np.exp(-t * s) - r, 2.0 + m
 
-        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - r(s), a, b, scale=1.0)
+        def d2(lo, hi):   # |phi''| + |r''|, both decreasing in s
+            return t * t * (np.exp(-t * lo) + (m + 1.0) / m * (1.0 + t * lo / m) ** (-m - 2.0))
+
+        self.proved = True
+        self.scalar_error = certified_sup(err, d2, a, b, tol)
         self.rounding = 16 * EPS * m
         self.n_solves = m
 
@@ -175,7 +202,9 @@ class Taylor1Plan:
     def __init__(self, lap, filt, a, b, tol, backend="auto"):
         t = filt.params["t"]
         self.lap, self.t, self.backend = lap, t, backend
-        self.scalar_error = sup_error(lambda s: np.exp(-t * s) - (1.0 - t * s), a, b, scale=1.0)
+        self.proved = True
+        self.scalar_error = certified_sup(lambda s: (np.exp(-t * s) - (1.0 - t * s), 2.0 + t * s),
+                                          lambda lo, hi: t * t * np.exp(-t * lo), a, b, tol)
         self.rounding = 8 * EPS * (1 + t * b)
         self.n_solves = 1
 
@@ -206,6 +235,7 @@ class PowerPlan:
             raise ValueError(f"method 'power' needs 2^{j} squarings for t * lambda_max = {t * b:.3g} "
                              f"(more than max_solves = {max_solves} solves); use 'rational' or 'shift_invert'")
         self.j = j
+        self.proved = False    # the sampled sup of |exp - r|: an estimate
         best = None
         qs = [int(degree)] if degree is not None else range(1, 31)
         for q in qs:

@@ -30,7 +30,7 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
-from .common import EPS, bnorm, inv_bnorm_upper, sup_error
+from .common import EPS, bnorm, certified_sup, filter_d2, inv_bnorm_upper, sup_error
 
 
 # ----------------------------------------------------------------------------- CF for exp
@@ -162,6 +162,27 @@ class PartialFractions:
     def n_solves(self) -> int:
         return len(self.terms)
 
+    def magnitude(self, s):
+        r""":math:`|\alpha_0| + \sum_j |c_j| / |\sigma s - z_j|`: the scale of the rounding of r(s)."""
+        s = np.asarray(s, dtype=float)
+        out = np.full(s.shape, abs(self.alpha0))
+        for c, z in zip(self.coef, self.poles):
+            out = out + abs(c) / np.abs(self.sigma * s - z)
+        return out
+
+    def d2_bound(self, lo, hi):
+        r"""Bound of :math:`|r''|` on each ``[lo_i, hi_i]``: :math:`\sum_j 2|c_j|\sigma^2 /
+        \operatorname{dist}(z_j, \sigma[lo, hi])^3`."""
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        sl, sh = np.minimum(self.sigma * lo, self.sigma * hi), np.maximum(self.sigma * lo, self.sigma * hi)
+        out = np.zeros(lo.shape)
+        for c, z in zip(self.coef, self.poles):
+            dr = np.where(z.real < sl, sl - z.real, np.where(z.real > sh, z.real - sh, 0.0))
+            dist = np.hypot(dr, z.imag)
+            with np.errstate(divide="ignore", over="ignore"):
+                out = out + 2.0 * abs(c) * self.sigma ** 2 / dist ** 3
+        return out
+
     def amplification(self, a: float, b: float) -> float:
         r""":math:`|\alpha_0| + \sum_j |c_j| / \operatorname{dist}(z_j, \sigma[a, b])`: bounds the B-norm of each term."""
         tot = abs(self.alpha0)
@@ -195,8 +216,17 @@ class PartialFractions:
         return out
 
 
-def certify(pf: PartialFractions, filt, a: float, b: float) -> float:
-    """Certified max |φ - r| on [a, b]."""
+def certify(pf: PartialFractions, filt, a: float, b: float, target: float = 0.0) -> float:
+    """Upper bound of max |φ - r| on [a, b]: proved (:func:`.common.certified_sup`) for the
+    built-in filters (``filter_d2(filt)`` is not None), else a refined-sample estimate."""
+    d2 = filter_d2(filt)
+    if d2 is not None:
+        def err2(s):
+            v = filt(s)
+            return v - pf(s), np.abs(v) + pf.magnitude(s)
+
+        return certified_sup(err2, lambda lo, hi: d2(lo, hi) + pf.d2_bound(lo, hi), a, b, target)
+
     def err(s):
         return filt(s) - pf(s)
 
@@ -283,6 +313,7 @@ class RationalPlan:
 
     def __init__(self, lap, filt, a, b, tol, degree=None, backend="auto"):
         self.lap, self.filt, self.a, self.b, self.backend = lap, filt, a, b, backend
+        self.proved = filter_d2(filt) is not None
         self.pseudo = 0
         self.pf = None
         if filt.kind == "heat":
@@ -290,7 +321,7 @@ class RationalPlan:
             degrees = [int(degree)] if degree is not None else range(2, 17, 2)
             for r in degrees:
                 pf = PartialFractions(*cf_exp(r)[:3], sigma=t)
-                err = certify(pf, filt, a, b)
+                err = certify(pf, filt, a, b, tol)
                 rnd = rounding(pf, a, b, b)
                 if err + rnd <= tol or r == degrees[-1]:
                     break

@@ -258,7 +258,7 @@ def _laplacian(V, C, options):
         return point_cloud_laplacian(V)
     from ..laplacian import laplacian
 
-    return laplacian(V, C, weights=options.get("weights", "cotan"), mass=options.get("mass", "full"))
+    return laplacian(V, C, weights=options.get("weights", "auto"), mass=options.get("mass", "lumped"))
 
 
 def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
@@ -347,7 +347,7 @@ def _worker_limits(client):
 
 
 def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progress: bool = True,
-        retries: int = 2, memory_limit="auto", weights: str = "cotan", mass: str = "full",
+        retries: int = 2, memory_limit="auto", weights: str = "auto", mass: str = "lumped",
         force: bool = False, retry_failed: bool = False) -> RunSummary:
     r"""Run ``job`` on every shape of ``inputs`` on dask.distributed; results in a Zarr store.
 

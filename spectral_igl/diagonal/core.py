@@ -148,8 +148,10 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
         Also return a dict: ``method``, ``applications`` (engine columns), ``k``,
         ``distance``, ``colours``, and for ``"probing"`` the measured ``sample_abs_error``
         and ``sample_rel_error`` (max over the samples), the ``samples`` and, when
-        chosen, the ``predicted_rel_error``; for ``"exact"`` the certified
-        ``abs_error_bound`` (max over vertices).
+        chosen, the ``predicted_rel_error``; for ``"exact"`` and ``"selinv"`` the
+        ``abs_error_bound`` (max over vertices); ``bound_kind``: ``"proof"`` when that bound
+        is proved, ``"estimate"`` when it is not (always for ``"probing"``, whose sample error
+        is measured), ``None`` without a bound (``"dense"``, ``"eigen"``).
     progress : bool, optional
         Draw a progress bar on stderr, one step per pole (``"selinv"``) or block of 64
         columns or colours; see :mod:`spectral_igl.progress` (default: off).
@@ -178,7 +180,8 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
     if auto:
         method = "selinv" if selinv_supported(lap, filt, delta) else ("dense" if n <= EXACT_MAX else "probing")
         log.info("kernel_diagonal: auto chose %r for %r (n=%d)", method, filt, n)
-    info = {"method": method, "applications": 0, "k": 0, "distance": None, "colours": None}
+    info = {"method": method, "applications": 0, "k": 0, "distance": None, "colours": None,
+            "bound_kind": None}
     dtype = np.complex128 if filt.is_complex else np.float64
 
     if method == "dense":
@@ -206,7 +209,8 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
                              engine_method, seed, progress)
         if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
             diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
-        info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)))
+        info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)),
+                    bound_kind=kern.bound_kind)
         samples = int(min(max(samples, 0), n))
         if samples:     # the selected inversion against solves with the same factors
             rng = np.random.default_rng(seed)
@@ -243,10 +247,12 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
             bar.update()
         bar.close()
         info["applications"] = n
+        info["bound_kind"] = op.bound_kind
         info["abs_error_bound"] = float(np.max(bound)) if np.all(np.isfinite(bound)) else float("nan")
         return diag, info
 
     diag, pinfo = probing_diagonal(lap, filt, G, delta, k, distance, samples, rtol, max_colours, seed,
                                    dtype, block=BLOCK, progress=progress)
     info.update(pinfo)
+    info["bound_kind"] = "estimate"     # the error is measured at sample vertices, not bounded
     return diag, info

@@ -4,17 +4,27 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+EPS = np.finfo(float).eps
+
 from ..approx.rational import RationalPlan, aaa_fit, certify, rounding
-from ..laplacian import lambda_max
+from ..approx.common import filter_d2
+from ..laplacian import lambda_max, lambda_max_kind
 from ..linalg import (
     grounded_factor,
     lambda_min_positive,
+    lambda_min_positive_kind,
     ldlt,
     ldlt_factor,
     mass_solve,
+    pseudo_solve,
     shifted_factor,
 )
 from ..progress import progress_bar
+
+#: nodes of the circle rule for the integer powers s^-p, p >= 3, and the radius as a
+#: fraction of lambda_min_positive: aliasing error (1/3)^24 = 3.5e-12 relative
+CIRCLE_NODES = 24
+CIRCLE_RADIUS = 1.0 / 3.0
 
 __all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]
 
@@ -50,9 +60,14 @@ class SelinvKernel:
     def __init__(self, lap, filt, tol):
         self.lap, self.filt = lap, filt
         p = filt.params.get("p") if filt.kind == "power" else None
-        self.power = int(round(p)) if p is not None and abs(p - round(p)) < 1e-12 and round(p) in (1, 2) else 0
+        integer = p is not None and abs(p - round(p)) < 1e-12 and round(p) >= 1
+        self.power = int(round(p)) if integer and round(p) in (1, 2) else 0
+        self.circle = int(round(p)) if integer and round(p) >= 3 else 0
         self._diag = None
-        if self.power:
+        self.bound_kind = "proof"
+        if self.circle:
+            self._circle_setup()
+        elif self.power:
             self.vol = lap.component_volume()
             self.w = np.asarray(lap.B.sum(axis=1)).ravel() / self.vol   # Q = I - 1 w^T per component
             self.fac, self.Lg, self.grounded = grounded_factor(lap)
@@ -71,6 +86,8 @@ class SelinvKernel:
             if pf is None:
                 raise NoSelinv("no usable rational fit")
             eps = certify(pf, filt, a, b) + rounding(pf, a, b, b)
+            if filter_d2(filt) is None:
+                self.bound_kind = "estimate"
         else:
             if filt.kind == "heat":
                 # |error_i| <= eps (B^-1)_ii and G_ii >= 1/V_c (the constant mode): this
@@ -81,6 +98,12 @@ class SelinvKernel:
             except (ValueError, RuntimeError) as exc:
                 raise NoSelinv(str(exc)) from None
             pf, eps = plan.pf, plan.scalar_error + plan.rounding
+            if not getattr(plan, "proved", False):
+                self.bound_kind = "estimate"
+        if filt.singular and lambda_min_positive_kind(lap) != "proof":
+            self.bound_kind = "estimate"
+        if lambda_max_kind(lap) != "proof":
+            self.bound_kind = "estimate"
         for c, z, k in pf.terms:
             # a real pole inside the spectrum's hull makes sigma L - z B indefinite
             if abs(z.imag) <= 1e-12 * max(1.0, abs(z)) and 0.0 <= z.real / pf.sigma <= b:
@@ -88,6 +111,50 @@ class SelinvKernel:
             if filt.singular and abs(z / pf.sigma) < 0.5 * a:   # ker L would dominate that term
                 raise NoSelinv(f"pole {z / pf.sigma:.3g} too close to the singularity at 0")
         self.pf, self.eps, self.n_factorizations = pf, eps, len(pf.terms)
+
+    # ----------------------------------------------------------------- integer powers p >= 3
+    def _circle_setup(self):
+        r"""The kernel of :math:`s^{-p}`, p >= 3, by the circle rule on the resolvent.
+
+        :math:`R(z) = (L - zB)^{-1} = -\frac{1}{z}ZZ^\top + \sum_{\lambda > 0} \frac{x x^\top}{\lambda - z}`,
+        so :math:`G = \sum_{\lambda>0}\lambda^{-p}xx^\top` is the coefficient of :math:`z^{p-1}`
+        of :math:`R(z) + ZZ^\top/z`, analytic in :math:`|z| < \lambda_{\min}^+`. The
+        trapezoidal rule on the circle :math:`|z| = \rho` with N nodes gives it up to the
+        aliased coefficients :math:`\sum_{m \ge 1} \rho^{mN} \sum_\lambda \lambda^{-p-mN}xx^\top`,
+        whose diagonal is at most :math:`G_{ii}\,q/(1-q)`, :math:`q = (\rho/a)^N`, with a the
+        certified :func:`~spectral_igl.linalg.lambda_min_positive`: a proved relative bound.
+        The nodes come in conjugate pairs (N/2 complex LDLᵀ factorizations, each with a
+        definite imaginary part, and their selected inverses).
+        """
+        lap = self.lap
+        self.a = lambda_min_positive(lap)
+        if lambda_min_positive_kind(lap) != "proof":
+            self.bound_kind = "estimate"
+        N = CIRCLE_NODES
+        rho = CIRCLE_RADIUS * self.a
+        th = 2.0 * np.pi * (np.arange(N // 2) + 0.5) / N           # upper half; conjugates implied
+        self.nodes = rho * np.exp(1j * th)
+        self.q = CIRCLE_RADIUS ** N
+        self.n_factorizations = N // 2
+        self.eps = 0.0
+
+    def _circle_factors(self):
+        for z in self.nodes:
+            # theta B + beta L with theta = -z: imaginary part -Im(z) B, definite
+            yield z, shifted_factor(self.lap, 1.0, -z, backend="ldlt")
+
+    def _circle_diagonal(self):
+        lap, p, N = self.lap, self.circle, CIRCLE_NODES
+        zz = np.asarray(lap.component_basis().multiply(lap.component_basis()).sum(axis=1)).ravel()
+        acc = np.zeros(lap.n)
+        mag = np.zeros(lap.n)
+        for z, fac in self._circle_factors():
+            term = (fac.inverse_diagonal() + zz / z) * z ** (-(p - 1))
+            acc += 2.0 * term.real / N       # the node and its conjugate
+            mag += 2.0 * np.abs(term) / N
+        diag = acc
+        bound = self.q / (1.0 - self.q) * np.abs(diag) / (1.0 - 2.0 * self.q) + 256 * EPS * mag
+        return diag, bound
 
     def _factors(self):
         for c, z, k in self.pf.terms:
@@ -115,6 +182,11 @@ class SelinvKernel:
     def columns(self, E):
         """R E for E of shape (n, k)."""
         lap = self.lap
+        if self.circle:                     # (L~+)^p B^-1 E: p exact pseudo-solves
+            u = pseudo_solve(lap, E)
+            for _ in range(self.circle - 1):
+                u = pseudo_solve(lap, lap.B @ u)
+            return u
         if self.power == 1:
             return self._commute(E)
         if self.power == 2:                 # G = G_c B G_c
@@ -130,7 +202,10 @@ class SelinvKernel:
     def diagonal(self, progress=None):
         """(diag R, per-vertex bound of |G_ii - R_ii|), computed once."""
         if self._diag is None:
-            self._diag = self._power_diagonal() if self.power else self._rational_diagonal(progress)
+            if self.circle:
+                self._diag = self._circle_diagonal()
+            else:
+                self._diag = self._power_diagonal() if self.power else self._rational_diagonal(progress)
         return self._diag
 
     def _rational_diagonal(self, progress=None):

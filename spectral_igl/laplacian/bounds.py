@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ._operator import Laplacian, as_laplacian
 
-__all__ = ["mass_ratio", "lambda_max"]
+__all__ = ["mass_ratio", "lambda_max", "lambda_max_kind"]
 
 
 def mass_ratio(lap: Laplacian) -> float:
@@ -82,3 +82,13 @@ def lambda_max(lap: Laplacian) -> float:
         return max(g / mass_ratio(lap), 1e-300)
 
     return lap.cache.fetch("bound", "lambda_max", build)
+
+
+def lambda_max_kind(lap: Laplacian) -> str:
+    """``"proof"`` when :func:`lambda_max` is a proved bound (a diagonal B, or the consistent
+    linear-FEM mass of a triangle or tet mesh), ``"estimate"`` when its mass ratio is a
+    Lanczos estimate (any other non-diagonal B)."""
+    lap = as_laplacian(lap)
+    if lap.lumped or (lap.domain in ("triangle", "tet") and lap.data.get("mass") == "full"):
+        return "proof"
+    return "estimate"

@@ -10,9 +10,11 @@ import scipy.sparse.linalg as spla
 from .._validate import as_int, as_tol, check_dense_size, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from ..progress import progress_bar
+from . import ldlt
 from .factor import factorize
 
-__all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive"]
+__all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
+           "negative_inertia"]
 
 
 def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progress=None):
@@ -133,25 +135,87 @@ def cached_eigs(lap: Laplacian, k: int | None = None):
     return lap.cache.fetch("eigen", int(k), lambda: eigs(lap, int(k)))
 
 
+def negative_inertia(lap: Laplacian, mu: float):
+    r"""Number of eigenvalues of :math:`\tilde L` below ``mu``, by Sylvester's law of inertia.
+
+    The number of negative pivots of an :math:`LDL^\top` factorization of :math:`L - \mu B`
+    (the package's LDLᵀ where it is built, else SuperLU with diagonal pivots and a
+    symmetric ordering). Returns ``None`` when no such factorization succeeds (a zero
+    pivot, or off-diagonal pivoting).
+    """
+    lap = as_laplacian(lap)
+    A = (lap.L - mu * lap.B).tocsr()
+    if ldlt.available():
+        try:
+            d = ldlt.LDLT(A).pivots()
+        except ValueError:
+            return None
+    else:
+        try:
+            lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+        except RuntimeError:
+            return None
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            return None
+        d = lu.U.diagonal()
+    if not np.all(np.isfinite(d)) or np.any(d == 0):
+        return None
+    return int(np.sum(d < 0))
+
+
 def lambda_min_positive(lap: Laplacian) -> float:
     r"""A lower bound of the smallest positive eigenvalue :math:`\lambda_{c+1}` of :math:`\tilde L`.
 
-    Computed by shift-invert Lanczos with ker L deflated (:func:`eigs`), accurate to near
-    machine precision, and lowered by 5% as a margin; dense for small n. Cached on ``lap``.
-    Needed by singular filters (the interval where :math:`s^{-p}` is approximated).
+    An estimate :math:`\hat\lambda` comes from shift-invert Lanczos with ker L deflated
+    (:func:`eigs`; dense for small n). It is then certified by spectrum slicing: for
+    :math:`\mu = 0.999\hat\lambda` (lowered until it succeeds), an :math:`LDL^\top`
+    factorization of :math:`L - \mu B` with exactly c negative pivots (c = number of
+    connected components, the dimension of ker L) shows, by Sylvester's law of inertia,
+    that exactly c eigenvalues lie below :math:`\mu`: the c zeros. Then
+    :math:`\mu \le \lambda_{c+1}`. When no factorization confirms it, the Lanczos value
+    lowered by 5% is returned and :func:`lambda_min_positive_kind` says ``"estimate"``.
+    Cached on ``lap``. Needed by the singular filters and by every spectrum-free method,
+    which approximate the filter on :math:`[\lambda_{c+1}, \lambda_{\max}]` once ker L is
+    split off exactly.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> ev, _ = sig.dense_eigs(lap, k=2)
+    >>> lo = sig.lambda_min_positive(lap)
+    >>> bool(0.99 * ev[1] < lo <= ev[1]), sig.linalg.lambda_min_positive_kind(lap)
+    (True, 'proof')
     """
+    return _lambda_min_positive(lap)[0]
+
+
+def lambda_min_positive_kind(lap: Laplacian) -> str:
+    """``"proof"`` when :func:`lambda_min_positive` was certified by inertia, else ``"estimate"``."""
+    return _lambda_min_positive(lap)[1]
+
+
+def _lambda_min_positive(lap):
     lap = as_laplacian(lap)
 
     def build():
         c = lap.n_components
         if lap.n - c <= 0:
-            lo = lambda_max(lap)
-        elif lap.n <= 400:
+            return lambda_max(lap), "proof"
+        if lap.n <= 400:
             ev, _ = dense_eigs(lap, k=min(lap.n, c + 1))
-            lo = 0.95 * float(ev[c])
         else:
             ev, _ = eigs(lap, c + 1)
-            lo = 0.95 * float(ev[c])
-        return max(lo, 1e-300)
+        est = float(ev[c])
+        if not est > 0:
+            return 1e-300, "estimate"
+        mu = 0.999 * est
+        for _ in range(6):
+            if negative_inertia(lap, mu) == c:
+                return mu, "proof"
+            mu *= 0.8
+        return max(0.95 * est, 1e-300), "estimate"
 
     return lap.cache.fetch("bound", "lambda_min_positive", build)

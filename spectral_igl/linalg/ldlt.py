@@ -140,3 +140,8 @@ class LDLT:
     def inverse_diagonal(self) -> np.ndarray:
         """diag(A⁻¹) by selected inversion."""
         return self._f.inverse_diagonal()
+
+    def pivots(self) -> np.ndarray:
+        """(n,) the diagonal D of the factorization, in the original ordering (its signs are
+        the inertia of A, by Sylvester's law)."""
+        return self._f.pivots()

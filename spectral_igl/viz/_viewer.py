@@ -70,7 +70,7 @@ class Viewer:
 
     def __init__(self, shape, quantity="distance", filter="biharmonic", t=None, method="auto",
                  source=0, n_levels=12, tol=1e-8, off_screen=None, window_size=(900, 800),
-                 weights="cotan", diagonal="auto", camera="auto", cmap=None):
+                 weights="auto", diagonal="auto", camera="auto", cmap=None):
         if quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
         if filter not in FILTERS:
