@@ -45,13 +45,14 @@ import logging
 import numpy as np
 
 from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size, check_spectral_function
+from ..approx import LARGE_T, spectral_operator
 from ..approx import METHODS as ENGINE_METHODS
-from ..approx import spectral_operator
 from ..filters import check_filter
 from ..laplacian import as_laplacian, lambda_max
+from ..linalg import lambda_min_positive, lambda_min_positive_kind
 from ..progress import progress_bar
 from .probing import probing_diagonal
-from .selinv import NoSelinv, selinv_kernel, selinv_supported
+from .selinv import NoSelinv, inverse_mass_diagonal, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal
 
 __all__ = ["kernel_diagonal", "check_diagonal_options", "METHODS", "EXACT_MAX"]
@@ -192,6 +193,20 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         k = max(1, min(100 if k is None else int(k), n))
         info["k"] = k
         return eigen_diagonal(lap, filt, k, delta), info
+
+    if method in ("auto", "selinv") and filt.kind == "heat" and filt.params["t"] * lambda_max(lap) > LARGE_T:
+        # heat at a large time is the projection onto the constants of each component:
+        # |G_ii - 1/V_c| = sum_{l > c} e^{-t lambda_l} x_l(i)^2 <= e^{-t lambda_2} (B^-1)_ii
+        decay = float(np.exp(-filt.params["t"] * lambda_min_positive(lap)))
+        minv = inverse_mass_diagonal(lap)
+        vol = lap.component_volume()
+        if decay * float(np.max(minv * vol)) <= tol:
+            diag, bound = 1.0 / vol, decay * minv
+            if delta == "seed":
+                diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
+            info.update(method="projection", abs_error_bound=float(bound.max(initial=0.0)),
+                        bound_kind=lambda_min_positive_kind(lap))
+            return diag, info
 
     if method == "selinv":
         if not selinv_supported(lap, filt, delta):
