@@ -10,7 +10,7 @@ rule of :func:`spectral_igl.optimal_time` (``"risk"``, ``"lcurve"``) prints the 
 cases where the error to the clean signal at the chosen t is smaller than at t/10 and at
 10 t, and the failures. Errors are measured with a dense eigendecomposition.
 
-``--real``: unit-area real meshes from ``/work/shared/data/meshes``: two smooth functions
+``--real``: unit-area real meshes from ``../shared/data/meshes`` (beside the checkout): two smooth functions
 plus white noise (10%, 30%, 100% of their RMS) with ``optimal_time``, and the noisy shape
 itself (i.i.d. or normal noise of 0.1, 0.3, 1 mean edge length h) with
 ``optimal_shape_time``; errors against the clean signal or shape with the engine's heat
@@ -61,7 +61,7 @@ def domains(quick):
     return out
 
 
-MESHES = Path("/work/shared/data/meshes")
+MESHES = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"   # ../shared beside the checkout
 
 
 def unit_mesh(name):

@@ -4,7 +4,7 @@ Usage::
 
     python benchmarks/transport.py [--shapes cow,spot,flat] [--ratios 10,20,40] [--dists 4,6,8,12,20]
 
-For each shape (real meshes from ``/work/shared/data/meshes``, ``flat``: a random Delaunay
+For each shape (real meshes from ``../shared/data/meshes`` (beside the checkout), ``flat``: a random Delaunay
 triangulation of the unit square, 3000 points), gamma = ratio * h^2 (h the mean edge
 length) and bumps (Gaussian of width h in exact geodesic distance) whose centres are
 ``dist`` * h apart, prints W_gamma / d - 1 (d from ``igl.exact_geodesic``), the asymmetry
@@ -26,7 +26,7 @@ import spectral_igl as sig  # noqa: E402
 from spectral_igl.applications import wasserstein_distance  # noqa: E402
 from spectral_igl.applications.geodesics import mean_edge_length  # noqa: E402
 
-MESHES = Path("/work/shared/data/meshes")
+MESHES = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"   # ../shared beside the checkout
 
 
 def shape(name):
