@@ -52,44 +52,16 @@ def _neighbours(P: np.ndarray, k: int | None, radius: float | None):
 
 
 def _clip_cells(Q: np.ndarray, half: np.ndarray) -> np.ndarray:
-    """Area of the Voronoi cell of the origin among the 2-D points ``Q`` (n, k, 2).
-
-    Sutherland--Hodgman clipping of the square ``[-half, half]²`` by the bisector
-    half-planes ``x·q <= |q|²/2``, vectorised over the n points.
-    """
-    n, k, _ = Q.shape
-    s = half[:, None]
-    poly = np.stack([np.c_[-s, -s], np.c_[s, -s], np.c_[s, s], np.c_[-s, s]], axis=1)
-    cnt = np.full(n, 4)
-    for j in range(k):
-        q = Q[:, j]
-        c = 0.5 * np.einsum("ij,ij->i", q, q)
-        f = np.einsum("imj,ij->im", poly, q) - c[:, None]
-        nxt = np.roll(poly, -1, axis=1)
-        fn = np.roll(f, -1, axis=1)
-        inside = f <= 0
-        cross = inside != (fn <= 0)
-        tt = f / np.where(cross, f - fn, 1.0)
-        X = poly + tt[..., None] * (nxt - poly)
-        m = poly.shape[1]
-        out = np.stack([poly, X], axis=2).reshape(n, 2 * m, 2)
-        keep = np.stack([inside, cross], axis=2).reshape(n, 2 * m)
-        cnt = keep.sum(axis=1)
-        order = np.argsort(~keep, axis=1, kind="stable")
-        width = max(int(cnt.max()), 3)
-        out = np.take_along_axis(out, order[:, :width, None], axis=1)
-        # pad every polygon with its last vertex (zero-length edges change nothing)
-        idx = np.minimum(np.arange(width)[None, :], np.maximum(cnt - 1, 0)[:, None])
-        poly = np.take_along_axis(out, idx[..., None], axis=1)
-    x, y = poly[..., 0], poly[..., 1]
-    area = 0.5 * np.abs(np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1))
-    return np.where(cnt >= 3, area, 0.0)
+    """Area of the Voronoi cell of the origin among the 2-D points ``Q`` (n, k, 2), clipped
+    by the square ``[-half, half]²``: the NumPy reference of the compiled clipping."""
+    return _clip_cells_dual(Q, half, cut_open=False)[0]
 
 
 def _clip_cells_dual(Q: np.ndarray, half: np.ndarray, cut_open: bool = True):
     """Voronoi cell of the origin among the 2-D points ``Q`` (n, k, 2), with its edges.
 
-    The same Sutherland--Hodgman clipping as :func:`_clip_cells`, each polygon edge
+    Sutherland--Hodgman clipping of the square ``[-half, half]²`` by the bisector
+    half-planes ``x·q <= |q|²/2``, vectorised over the n points, each polygon edge
     carrying the index of the bisector it lies on (-1 for the bounding square).
     Returns ``(area (n,), dual (n, k), open (n,) bool)`` with ``dual[i, j]`` the length
     of the cell's edge on the bisector of ``Q[i, j]`` (0 when that neighbour is not a
