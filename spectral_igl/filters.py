@@ -242,7 +242,7 @@ def mexican_hat(t, form: str = "tse") -> Filter:
         def fn(s):
             u = t * np.maximum(np.asarray(s, dtype=float), 0.0)
             return np.sqrt(u) * np.exp(-u * u)
-        return Filter(fn, name="mexican_hat_survey", kind="mexican_hat", params={"t": t, "form": "survey"},
+        return Filter(fn, name="mexican_hat_survey", kind="mexican_hat_survey", params={"t": t},
                       square=lambda: Filter(lambda s: t * np.maximum(s, 0.0) * np.exp(-2.0 * (t * s) ** 2),
                                             name="mexican_hat_survey^2",
                                             key=("square", "mexican_hat_survey", t)))

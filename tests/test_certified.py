@@ -28,8 +28,8 @@ MAX_SOLVES = 10 ** 6 if LONG else 4000
 
 METHODS = ("auto", "dense", "euler", "taylor1", "power", "krylov", "shift_invert", "taylor",
            "chebyshev", "rational", "contour")
-FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "commute_time", "biharmonic",
-           "polyharmonic3", "polyharmonic4", "user")
+FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "mexican_hat_survey", "multiscale",
+           "commute_time", "biharmonic", "polyharmonic3", "polyharmonic4", "user")
 TOLS = (1e-4, 1e-6, 1e-8, 1e-10)
 REAL = ("spot.obj", "cow.obj", "beetle.obj", "fandisk.obj")
 
@@ -97,6 +97,10 @@ def _filter(name, t):
         return filters.Filter(lambda s: 1.0 / (1.0 + t * s) ** 2, name="resolvent2")
     if name.startswith("polyharmonic"):
         return filters.polyharmonic(int(name[-1]))
+    if name == "mexican_hat_survey":
+        return filters.mexican_hat(t, form="survey")
+    if name == "multiscale":
+        return filters.multiscale(t, 1.0, 1.5)
     return filters.by_name(name, t)
 
 
@@ -157,6 +161,45 @@ def test_bound_never_below_error(shape, fname, logt, method, tol, rhs, seed):
         mass_in = Z.T @ (f if rhs else lap.B @ f)
         mass_out = Z.T @ (lap.B @ u)
         assert np.all(np.abs(mass_out - mass_in) <= bound + slack), (shape, t, op.method)
+
+
+ANALYTIC = [filters.heat(0.3), filters.heat(40.0), filters.wave(0.7), filters.mexican_hat(0.3),
+            filters.mexican_hat(0.3, form="survey"), filters.multiscale(0.3, 1.0, 1.5),
+            filters.commute_time(), filters.biharmonic(), filters.polyharmonic(3)]
+
+
+@pytest.mark.parametrize("filt", ANALYTIC, ids=lambda f: f.name)
+def test_analytic_ingredients_of_proofs_bound_the_filter(filt):
+    """What a proof rests on is checked against the filter itself: ``filter_d2`` bounds
+    |phi''| on every interval (second differences), ``filter_logmax`` bounds |phi| on the
+    Bernstein ellipse. A filter whose phi'' is unbounded (the survey's Mexican hat, sqrt at
+    0) or that is not analytic on [a, b] must have neither."""
+    from spectral_igl.approx.common import filter_d2, filter_logmax
+
+    a, b = (0.05, 30.0) if filt.singular else (0.0, 30.0)
+    d2 = filter_d2(filt)
+    if d2 is not None:
+        x = np.linspace(a, b, 4001)
+        lo, hi = x[:-1], x[1:]
+        h = 1e-4 * (hi - lo)
+        for frac in (0.0, 0.3, 0.7, 1.0):
+            s = np.clip(lo + frac * (hi - lo), a + h, None)
+            fd = (filt(s + h) - 2 * filt(s) + filt(s - h)) / h ** 2
+            assert np.all(np.abs(fd) <= 1.001 * d2(lo, hi) + 1e-6 * np.abs(filt(s)).max() / h ** 2)
+    logmax = filter_logmax(filt, a, b)
+    if logmax is not None:
+        c, d = 0.5 * (a + b), 0.5 * (b - a)
+        w = np.exp(1j * np.linspace(0, 2 * np.pi, 721))
+        for rho in (1.01, 1.2, 2.0, 5.0):
+            z = c + d * 0.5 * (rho * w + 1.0 / (rho * w))
+            L = logmax(rho)
+            if np.isfinite(L):
+                with np.errstate(all="ignore"):
+                    val = np.abs(filt.fn(z))     # the filter's formula, continued off the axis
+                ok = (val > 0) & np.isfinite(val)     # exp overflows beyond 1e308
+                assert np.all(np.log(val[ok]) <= L + 1e-9 * (1.0 + abs(L)))
+    if filt.kind == "mexican_hat_survey":        # sqrt(ts) at 0: neither holds
+        assert d2 is None and logmax is None
 
 
 @pytest.mark.parametrize("t", [1e-12, 1e-8, 1e4, 1e12, 1e16, 1e300])

@@ -245,7 +245,7 @@ class SpectralOperator(spla.LinearOperator):
         self.lap, self.filter, self.method, self.tol = lap, filt, method, tol
         self.lambda_max = lambda_max(lap)
         self.split = method not in ("dense", "eigen")
-        t = filt.params.get("t") if filt.kind in ("heat", "mexican_hat") else None
+        t = filt.params.get("t") if filt.kind in ("heat", "mexican_hat", "mexican_hat_survey") else None
         decays = self.split and t is not None and t * self.lambda_max > LARGE_T
         self.a = lambda_min_positive(lap) if (filt.singular or decays) else 0.0
         if self.a >= self.lambda_max:          # only isolated vertices, or a 1-edge mesh

@@ -101,8 +101,17 @@ def _taylor_coeffs(filt, a, b, degree):
     if p is None:
         pr = Polynomial(C.cheb2poly(c.real))(x)
         pi = Polynomial(C.cheb2poly(c.imag))(x)
-        return pr.coef + 1j * pi.coef
-    return p(x).coef
+        out = _pad(pr.coef, degree) + 1j * _pad(pi.coef, degree)
+    else:
+        out = _pad(p(x).coef, degree)
+    return out
+
+
+def _pad(coef, degree):
+    """``degree + 1`` coefficients: a short Chebyshev series (φ resolved by few terms) padded with 0."""
+    out = np.zeros(degree + 1, dtype=coef.dtype)
+    out[: min(coef.size, degree + 1)] = coef[: degree + 1]
+    return out
 
 
 class TaylorPlan:
