@@ -30,7 +30,8 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
-from .common import EPS, bnorm, certified_sup, filter_d2, inv_bnorm_upper, sup_error
+from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2, filter_d2_ellipse, filter_second,
+                     interpolated_d2, inv_bnorm_upper, sup_error)
 
 
 # ----------------------------------------------------------------------------- CF for exp
@@ -184,6 +185,42 @@ class PartialFractions:
                 out = out + 2.0 * abs(c) * np.float64(self.sigma) ** 2 / dist ** 3
         return out
 
+    def second(self, s):
+        r""":math:`r''(s) = \sum_j 2c_j\sigma^2/(\sigma s - z_j)^3` and the sum of the
+        magnitudes of its terms (the scale of its rounding)."""
+        s = np.asarray(s, dtype=float)
+        flat = s.ravel()
+        out = np.empty(flat.size, dtype=complex)
+        mag = np.empty(flat.size)
+        sig2 = 2.0 * np.float64(self.sigma) ** 2
+        for k in range(0, flat.size, 4096):
+            with np.errstate(all="ignore"):
+                d = 1.0 / (self.sigma * flat[k:k + 4096, None] - self.poles[None, :])
+                w = (d * d * d) * (sig2 * self.coef)[None, :]
+            out[k:k + 4096] = w.sum(axis=1)
+            mag[k:k + 4096] = np.abs(w).sum(axis=1)
+        out, mag = out.reshape(s.shape), mag.reshape(s.shape)
+        return (out.real if self.real_symmetric else out), mag
+
+    def d2_ellipse(self, lo, hi, rho):
+        r"""Bound of :math:`|r''|` on the Bernstein ellipse :math:`E_\rho` of each [lo, hi]:
+        :math:`\sum_j 2|c_j|\sigma^2/\operatorname{dist}(z_j, \sigma E_\rho)^3`, with the
+        distance to the ellipse's box as a lower bound (``inf`` if a pole is in the box)."""
+        c, A, B = ellipse_box(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), rho)
+        sg = abs(self.sigma)
+        flat_c, flat_a, flat_b = c.ravel(), A.ravel(), B.ravel()
+        out = np.empty(flat_c.size)
+        w = 2.0 * np.abs(self.coef) * np.float64(sg) ** 2
+        for k in range(0, flat_c.size, 4096):
+            sl = slice(k, k + 4096)
+            with np.errstate(all="ignore"):
+                dx = np.maximum(np.abs(self.poles.real[None, :] - self.sigma * flat_c[sl, None])
+                                - sg * flat_a[sl, None], 0.0)
+                dy = np.maximum(np.abs(self.poles.imag)[None, :] - sg * flat_b[sl, None], 0.0)
+                dist = np.hypot(dx, dy)
+                out[sl] = np.where(dist > 0, w[None, :] / dist ** 3, np.inf).sum(axis=1)
+        return out.reshape(c.shape)
+
     def amplification(self, a: float, b: float) -> float:
         r""":math:`|\alpha_0| + \sum_j |c_j| / \operatorname{dist}(z_j, \sigma[a, b])`: bounds the B-norm of each term."""
         tot = abs(self.alpha0)
@@ -226,7 +263,19 @@ def certify(pf: PartialFractions, filt, a: float, b: float, target: float = 0.0)
             v = filt(s)
             return v - pf(s), np.abs(v) + pf.magnitude(s)
 
-        return certified_sup(err2, lambda lo, hi: d2(lo, hi) + pf.d2_bound(lo, hi), a, b, target)
+        def loose(lo, hi):
+            return d2(lo, hi) + pf.d2_bound(lo, hi)
+
+        phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
+
+        def e2(s):
+            v2 = phi2(s)
+            r2, m2 = pf.second(s)
+            return v2 - r2, np.abs(v2) + m2
+
+        tight = interpolated_d2(e2, lambda lo, hi, rho: ell(lo, hi, rho) + pf.d2_ellipse(lo, hi, rho),
+                                loose=loose)
+        return certified_sup(err2, tight, a, b, target)
 
     def err(s):
         return filt(s) - pf(s)
