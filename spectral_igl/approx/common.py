@@ -135,7 +135,7 @@ def sampled_error(fn, approx, a: float, b: float) -> float:
         return sup_error(lambda s: fn(s) - approx(s), a, b, scale=scale if np.isfinite(scale) else None)
 
 
-def interpolated_d2(e2, ellipse2, m: int = 16, loose=None, chunk: int = 20_000):
+def interpolated_d2(e2, ellipse2, m: int = 8, loose=None, chunk: int = 20_000):
     r"""``d2(lo, hi)`` for :func:`certified_sup` from :math:`e''` itself.
 
     On each interval, :math:`e''` is sampled at the m + 1 Chebyshev points; its interpolant
@@ -154,7 +154,7 @@ def interpolated_d2(e2, ellipse2, m: int = 16, loose=None, chunk: int = 20_000):
     """
     nodes = np.cos(np.pi * np.arange(m + 1) / m)
     lebesgue = 1.0 + 2.0 / np.pi * np.log(m + 1.0)
-    rhos = (1.25, 1.5, 2.0, 3.0, 5.0, 8.0, 16.0, 64.0)
+    rhos = (1.5, 3.0, 8.0, 32.0, 128.0)
 
     def d2(lo, hi):
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
