@@ -121,7 +121,10 @@ def _wks_filter(e, sigma):
             ls = np.log(np.where(s > 0, s, np.finfo(float).tiny))
         return np.where(s > 0, np.exp(-((e - ls) ** 2) / (2.0 * sigma ** 2)), 0.0)
 
-    return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=False, key=("wks", e, sigma))
+    # singular: a log-normal band, 0 on ker L by definition (the engine's convention for
+    # singular filters) and analytic only away from s = 0, so it is fitted on [lambda_2, b]
+    return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=True, kind="wks",
+                  params={"e": e, "sigma": sigma}, key=("wks", e, sigma))
 
 
 #: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)

@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 import spectral_igl as sig
 from data_generators import box_tets, icosphere
 from spectral_igl import filters
+from spectral_igl.descriptors import _wks_filter
 
 LONG = os.environ.get("SPECTRAL_IGL_CAMPAIGN", "") == "long"
 CASES = 2000 if LONG else 300
@@ -165,7 +166,15 @@ def test_bound_never_below_error(shape, fname, logt, method, tol, rhs, seed):
 
 ANALYTIC = [filters.heat(0.3), filters.heat(40.0), filters.wave(0.7), filters.mexican_hat(0.3),
             filters.mexican_hat(0.3, form="survey"), filters.multiscale(0.3, 1.0, 1.5),
-            filters.commute_time(), filters.biharmonic(), filters.polyharmonic(3)]
+            filters.commute_time(), filters.biharmonic(), filters.polyharmonic(3),
+            _wks_filter(1.5, 0.4), _wks_filter(-3.0, 0.1)]
+
+
+def _continued(filt, z):
+    """phi at complex z: the filter's formula continued off the axis."""
+    if filt.kind == "wks":
+        return np.exp(-(filt.params["e"] - np.log(z)) ** 2 / (2 * filt.params["sigma"] ** 2))
+    return filt.fn(z)
 
 
 @pytest.mark.parametrize("filt", ANALYTIC, ids=lambda f: f.name)
@@ -195,7 +204,7 @@ def test_analytic_ingredients_of_proofs_bound_the_filter(filt):
             L = logmax(rho)
             if np.isfinite(L):
                 with np.errstate(all="ignore"):
-                    val = np.abs(filt.fn(z))     # the filter's formula, continued off the axis
+                    val = np.abs(_continued(filt, z))
                 ok = (val > 0) & np.isfinite(val)     # exp overflows beyond 1e308
                 assert np.all(np.log(val[ok]) <= L + 1e-9 * (1.0 + abs(L)))
     if filt.kind == "mexican_hat_survey":        # sqrt(ts) at 0: neither holds

@@ -201,6 +201,13 @@ def filter_second(filt):
     if kind == "mexican_hat":
         t = p["t"]
         return lambda x: t * t * (t * x - 2.0) * np.exp(-t * x)
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def w2(x):
+            w = np.log(x) - e
+            return np.exp(-w * w / (2 * sg * sg)) * (w * w / sg ** 4 + (w - 1.0) / sg ** 2) / (x * x)
+        return w2
     if filt.key[0] == ("one",):
         return lambda x: np.zeros(np.shape(x))
     return None
@@ -232,6 +239,17 @@ def filter_d2_ellipse(filt):
             c, A, _ = ellipse_box(lo, hi, rho)
             return t * t * (t * (np.abs(c) + A) + 2.0) * _heat_box(t, c, A, None)
         return mh
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def we(lo, hi, rho):
+            c, A, B = ellipse_box(lo, hi, rho)
+            left = c - A
+            with np.errstate(all="ignore"):
+                theta = np.arctan(B / left)
+                w1, w2 = np.log(left) - e, np.log(np.hypot(c + A, B)) - e
+                return np.where(left > 0, _wks_second_bound(w1, w2, theta, sg) / left ** 2, np.inf)
+        return we
     if filt.key[0] == ("one",):
         return lambda lo, hi, rho: np.zeros(np.shape(lo))
     return None
@@ -263,9 +281,26 @@ def filter_d2(filt):
     if kind == "mexican_hat":
         t = p["t"]   # phi'' = t^2 (ts - 2) e^{-ts}
         return lambda lo, hi: np.exp(2 * _logt(t) - t * lo) * (t * hi + 2.0)
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def wk(lo, hi):     # |phi''| <= max g * max |P| / lo^2 over w = log s - e in the interval
+            with np.errstate(all="ignore"):
+                w1, w2 = np.log(lo) - e, np.log(hi) - e
+                return np.where(lo > 0, _wks_second_bound(w1, w2, 0.0, sg) / lo ** 2, np.inf)
+        return wk
     if filt.key[0] == ("one",):
         return lambda lo, hi: np.zeros(np.shape(lo))
     return None
+
+
+def _wks_second_bound(w1, w2, theta, sg):
+    r"""Bound of :math:`|g(w)P(w)|` for :math:`w = x + iy`, x in [w1, w2], :math:`|y| \le \theta`,
+    where :math:`g = e^{-w^2/2\sigma^2}`, :math:`P = w^2/\sigma^4 + w/\sigma^2 - 1/\sigma^2`:
+    the WKS filter's :math:`\varphi''(s) = g(\log s - e) P(\log s - e)/s^2`."""
+    dmin = np.where((w1 <= 0) & (w2 >= 0), 0.0, np.minimum(np.abs(w1), np.abs(w2)))
+    W = np.maximum(np.abs(w1), np.abs(w2)) + theta
+    return np.exp(-(dmin * dmin - theta * theta) / (2 * sg * sg)) * (W * W / sg ** 4 + (W + 1.0) / sg ** 2)
 
 
 def filter_logmax(filt, a: float, b: float):
@@ -297,6 +332,19 @@ def filter_logmax(filt, a: float, b: float):
             A = semi(rho)[0]
             return np.log(t) + np.log(c + A) - t * (c - A)
         return lm
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def lw(rho):       # |g(log z - e)| <= exp(-(dmin^2 - theta^2) / 2 sigma^2) on the box
+            A, B = semi(rho)
+            left = c - A
+            if not left > 0:
+                return np.inf
+            theta = np.arctan(B / left)
+            w1, w2 = np.log(left) - e, np.log(np.hypot(c + A, B)) - e
+            dmin = 0.0 if w1 <= 0 <= w2 else min(abs(w1), abs(w2))
+            return -(dmin * dmin - theta * theta) / (2 * sg * sg)
+        return lw
     if filt.key[0] == ("one",):
         return lambda rho: 0.0
     return None
