@@ -271,6 +271,36 @@ class HeatGeodesics:
         return out
 
 
+    def compute_each(self, sources, block: int = 256) -> np.ndarray:
+        """(n, s) geodesic distances, column k from ``sources[k]`` alone: the solves of a
+        block of sources together (``inf`` outside each source's component)."""
+        src = as_indices(sources, self.n, "sources").reshape(-1)
+        out = np.empty((self.n, src.size))
+        comps = self.lap.components
+        for a in range(0, src.size, block):
+            s = src[a:a + block]
+            k = s.size
+            delta = np.zeros((self.n, k))
+            delta[s, np.arange(k)] = 1.0
+            u = self._diffuse(delta)
+            g = (self.G @ u).reshape(self._dim, -1, k)
+            norm = np.sqrt(np.sum(g * g, axis=0))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                X = np.where(norm > 0, -g / norm, 0.0) * self.A[None, :, None]
+            div = self.G.T @ X.reshape(-1, k)
+            if self._grounded:
+                fixed = np.setdiff1d(np.arange(self.n), self._free)
+                div[fixed] = 0.0
+                phi = self._poisson.solve(div)
+                phi[fixed] = 0.0
+            else:
+                phi = np.zeros((self.n, k))
+                phi[self._free] = self._poisson.solve(div[self._free])
+            same = comps[:, None] == comps[s][None, :]
+            out[:, a:a + k] = np.where(same, phi - phi[s, np.arange(k)][None, :], np.inf)
+        return out
+
+
 def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None = None,
                       step: str = "intrinsic_delaunay", progress=None):
     r"""Geodesic distance from ``source`` by the heat method or Varadhan's formula.
