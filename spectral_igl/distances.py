@@ -397,10 +397,12 @@ class OneToAll:
     r"""One-to-all spectral distances of one filter on one shape, precomputed once.
 
     The kernel diagonal :math:`G_{jj}` (and, for ``diagonal="selinv"``, the factorizations
-    of its partial fractions) is computed when the object is made; each :meth:`distance`
-    then costs about one kernel column. The one-call functions (:func:`spectral_distance`,
-    :func:`diffusion_distance`, ...) share the same cache on the Laplacian, so a second
-    source through them costs the same; this object makes the precomputation explicit.
+    of its partial fractions, kept in ``lap.cache`` within its factor budget) is computed
+    when the object is made; each :meth:`distance` then costs about one kernel column. The
+    one-call functions (:func:`spectral_distance`, :func:`diffusion_distance`, ...) hold one
+    factorization at a time instead (the least memory for one source) and keep the
+    diagonal, so a second source through them pays the factorizations again but not the
+    selected inversion; for many sources use this object.
 
     Parameters
     ----------
@@ -431,6 +433,14 @@ class OneToAll:
         keys = ("method", "delta", "k", "distance", "samples", "rtol", "max_colours", "tol")
         diag_opts = {("engine_method" if k == "method" else k): v for k, v in options.items() if k in keys}
         diag_opts["method"] = options.get("diagonal", "auto")
+        G2 = self.filter.square
+        delta = options.get("delta", "mass")
+        if diag_opts["method"] in ("auto", "selinv") and selinv_supported(self.lap, G2, delta) \
+                and not heat_projection_applies(self.lap, G2):
+            try:   # the factorizations stay (within the budget) for the columns to come
+                selinv_kernel(self.lap, G2, options.get("tol", 1e-8)).keep_factors = True
+            except NoSelinv:
+                pass
         if diag_opts["method"] != "eigen":
             self.diagonal, self.info = kernel_diagonal(self.lap, self.filter.square, return_info=True,
                                                        **diag_opts)

@@ -75,19 +75,25 @@ def test_filters_are_values():
 
 
 def test_second_source_reuses_the_precomputation():
-    """Above the dense limit a one-call distance from a second source reuses the selected-
-    inverse kernel and diagonal of the first (no new factorization, no new diagonal)."""
+    """Above the dense limit a one-call distance holds one factorization at a time (none is
+    kept) and a second source reuses its diagonal; ``OneToAll`` keeps the factorizations, so
+    its second source needs no new one."""
     lap = sig.laplacian(*torus(n_major=80, n_minor=50))   # 4,000 vertices > EXACT_MAX
     assert lap.n > sig.diagonal.EXACT_MAX
     d0 = sig.diffusion_distance(lap, 1e-2, 0)
-    factors = set(lap.cache.keys("factor"))
-    hits, misses = lap.cache.hits, lap.cache.misses
+    assert not [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
+    diagonals = lap.cache.keys("diagonal")
     d7 = sig.diffusion_distance(lap, 1e-2, 7)
-    assert set(lap.cache.keys("factor")) == factors
-    assert lap.cache.hits > hits
-    # the only new entries are the operator's (none: the selinv path builds no operator)
-    assert lap.cache.misses - misses <= 1
+    assert lap.cache.keys("diagonal") == diagonals        # no new selected inversion
     assert abs(d0[7] - d7[0]) <= 1e-7 * d0[7]
+    lap2 = sig.laplacian(*torus(n_major=80, n_minor=50))
+    solver = sig.OneToAll(lap2, filters.heat(5e-3))
+    factors = set(lap2.cache.keys("factor"))
+    assert [k for k in factors if isinstance(k[2], complex)]
+    hits = lap2.cache.hits
+    e0, e7 = solver.distance(0), solver.distance(7)
+    assert set(lap2.cache.keys("factor")) == factors and lap2.cache.hits > hits
+    assert abs(e0[7] - e7[0]) <= 1e-7 * e0[7] and abs(e0[7] - d0[7]) <= 1e-7 * d0[7]
 
 
 def test_one_to_all_object_matches_the_one_call_function(lap):

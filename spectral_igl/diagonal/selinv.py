@@ -65,6 +65,9 @@ class SelinvKernel:
         self.circle = int(round(p)) if integer and round(p) >= 3 else 0
         self._diag = None
         self._pending, self._done = [], []   # blocks E whose R E the diagonal's pass computes
+        #: keep the diagonal's factorizations in ``lap.cache`` (for later columns) instead of
+        #: dropping each after use
+        self.keep_factors = False
         self.bound_kind = "proof"
         if self.circle:
             self._circle_setup()
@@ -227,7 +230,7 @@ class SelinvKernel:
         E = np.hstack(blocks) if blocks else None
         out = None if E is None else np.zeros(E.shape)
         with progress_bar(len(self.pf.terms), "kernel diagonal", progress, unit="pole") as bar:
-            for c, k, fac in self._factors(keep=E is None):
+            for c, k, fac in self._factors(keep=self.keep_factors):
                 diag += k * (c * fac.inverse_diagonal()).real
                 if E is not None:
                     out += k * (c * fac.solve(E)).real
