@@ -363,16 +363,59 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     return make_laplacian(L, B, domain="points", data=data, _symmetric=True)
 
 
+_NORMAL_K = 12  # neighbours of the first (PCA) normal estimate
+
+
+def _tangent_frames(N: np.ndarray) -> np.ndarray:
+    """(n, 3, 2): an orthonormal basis of the plane normal to each unit row of ``N``."""
+    a = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    e1 = np.cross(N, a)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    return np.stack([e1, np.cross(N, e1)], axis=2)
+
+
+def _fan_normals(nb: np.ndarray, Q: np.ndarray, dual: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """Unit normal of each point's local Delaunay fan: the sum of the 3-D cross products of
+    angularly consecutive Delaunay neighbours (triangles of the star, not across a gap of π
+    or more); ``N`` where the star has no triangle."""
+    n, k = dual.shape
+    ang = np.where(dual > 0, np.arctan2(Q[..., 1], Q[..., 0]), np.inf)
+    order = np.argsort(ang, axis=1)
+    cnt = (dual > 0).sum(axis=1)
+    nbs = np.take_along_axis(nb, order[..., None], axis=1)
+    angs = np.take_along_axis(ang, order, axis=1)
+    rows = np.arange(n)
+    S = np.zeros((n, 3))
+    for m in range(k):
+        b = np.where(m + 1 < cnt, m + 1, 0)
+        gap = np.where(b == 0, angs[rows, b] + 2.0 * np.pi - angs[:, m], angs[rows, b] - angs[:, m])
+        ok = (m < cnt) & (cnt >= 2) & (gap > 0) & (gap < np.pi)
+        S += np.where(ok[:, None], np.cross(nbs[:, m], nbs[rows, b]), 0.0)
+    norm = np.linalg.norm(S, axis=1)
+    good = norm > 0
+    return np.where(good[:, None], S / np.where(good, norm, 1.0)[:, None], N)
+
+
 def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
-    """Cell areas, Delaunay weights and openness of the points ``rows`` among ``J`` (r, k)."""
+    """Cell areas, Delaunay weights and openness of the points ``rows`` among ``J`` (r, k).
+
+    The tangent plane is that of the local Delaunay fan: a first normal from the centred
+    PCA of the nearest ``_NORMAL_K`` neighbours, the fan of the Voronoi cell in that plane,
+    then the plane normal to the fan's own (3-D) normal, where the cell is clipped again.
+    The weight of a Delaunay neighbour is the cell edge over the 3-D distance.
+    """
     nb = P[J] - P[rows][:, None, :]
-    C = np.einsum("nki,nkj->nij", nb, nb)
-    _, U = np.linalg.eigh(C)
-    Q = np.einsum("nki,nij->nkj", nb, U[:, :, 1:])
+    kn = min(_NORMAL_K, J.shape[1])
+    c = nb[:, :kn] - nb[:, :kn].mean(axis=1, keepdims=True)
+    _, U = np.linalg.eigh(np.einsum("nki,nkj->nij", c, c))
     half = 1.5 * d[:, min(7, d.shape[1] - 1)]
+    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(U[:, :, 0]))
+    _, dual, _ = _clip_cells_dual(Q, half, cut_open)
+    N = _fan_normals(nb, Q, dual, U[:, :, 0])
+    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(N))
     area, dual, is_open = _clip_cells_dual(Q, half, cut_open)
-    dist = np.linalg.norm(Q, axis=2)
-    w = np.where(dual > 0, dual / np.where(dist > 0, dist, 1.0), 0.0)
+    dist = np.linalg.norm(nb, axis=2)
+    w = np.where((dual > 0) & (dist > 0), dual / np.where(dist > 0, dist, 1.0), 0.0)
     return area, w, is_open
 
 
@@ -410,8 +453,15 @@ def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     nz = w.ravel() > 0
     W = sp.csr_matrix((w.ravel()[nz], (r[nz], J.ravel()[nz])), shape=(n, n))
     W = ((W + W.T) * 0.5).tocsr()
+    # the mass that L is consistent with: f = |x - p_i|² has surface Laplacian 4 at p_i on
+    # any surface, and (L f)_i = sum_j W_ij |p_j - p_i|², so m_i = sum_j W_ij |p_j - p_i|² / 4
+    # (the Voronoi area for a planar Delaunay star)
+    C = W.tocoo()
+    mass = 0.25 * np.bincount(C.row, weights=C.data * np.sum((P[C.row] - P[C.col]) ** 2, axis=1),
+                              minlength=n)
     good = np.isfinite(area) & (area > 0)
     if not good.all():
         area = np.where(good, area, float(np.mean(area[good])) if good.any() else 1.0)
+    mass = np.where(np.isfinite(mass) & (mass > 0), mass, area)   # a point without a neighbour
     data = {"P": P, "method": "delaunay", "k": k, "radius": None, "boundary": boundary}
-    return make_laplacian(-W, sp.diags(area).tocsr(), domain="points", data=data)
+    return make_laplacian(-W, sp.diags(mass).tocsr(), domain="points", data=data)
