@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import spectral_igl as sig  # noqa: E402
-from data_generators import sphere_eigenvalues, sphere_points  # noqa: E402
+from data_generators import midpoint_subdivide, sphere_eigenvalues, sphere_points  # noqa: E402
 from spectral_igl.io import read_mesh  # noqa: E402
 
 MESHES = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "meshes"
@@ -86,18 +86,6 @@ def spheres(sizes, methods):
                 ev = smallest(L, M, 17)
                 cells.append(f"{m} {np.max(np.abs(ev[1:] - EX16) / EX16):.4f} ({L.nnz / n:.0f})")
             print(f"{name:11s} {n:6d} | " + " | ".join(cells), flush=True)
-
-
-def midpoint_subdivide(V, F):
-    """Each triangle into four at its edge midpoints: the same piecewise-linear surface."""
-    E = np.sort(np.r_[F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]], axis=1)
-    u, inv = np.unique(E, axis=0, return_inverse=True)
-    m = len(V) + inv.ravel().reshape(3, -1).T          # midpoint opposite each corner
-    Vn = np.r_[V, 0.5 * (V[u[:, 0]] + V[u[:, 1]])]
-    a, b, c = F.T
-    ma, mb, mc = m.T
-    Fn = np.r_[np.c_[a, mc, mb], np.c_[mc, b, ma], np.c_[mb, ma, c], np.c_[ma, mb, mc]]
-    return Vn, Fn
 
 
 def components(L):
