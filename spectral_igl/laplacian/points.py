@@ -78,21 +78,26 @@ def _clip_cells_dual(Q: np.ndarray, half: np.ndarray, cut_open: bool = True):
     for j in range(k):
         q = Q[:, j]
         c = 0.5 * np.einsum("ij,ij->i", q, q)
+        # only the cnt real vertices of each row count: the slots past them are padding
+        # (its width is the batch's longest polygon) and the polygon closes at cnt - 1 -> 0
+        m = poly.shape[1]
+        slot = np.arange(m)[None, :]
+        real = slot < cnt[:, None]
+        after = np.where(slot + 1 < cnt[:, None], slot + 1, 0)
         f = np.einsum("imj,ij->im", poly, q) - c[:, None]
-        nxt = np.roll(poly, -1, axis=1)
-        fn = np.roll(f, -1, axis=1)
+        nxt = np.take_along_axis(poly, after[..., None], axis=1)
+        fn = np.take_along_axis(f, after, axis=1)
         inside = f <= 0
-        cross = inside != (fn <= 0)
+        cross = (inside != (fn <= 0)) & real
         if not cross.any():
             continue
         tt = f / np.where(cross, f - fn, 1.0)
         X = poly + tt[..., None] * (nxt - poly)
-        m = poly.shape[1]
         out = np.stack([poly, X], axis=2).reshape(n, 2 * m, 2)
         # the edge leaving a crossing point runs along the bisector j when the polygon
         # leaves the half-plane there, along the old edge when it comes back in
         olab = np.stack([lab, np.where(inside, j, lab)], axis=2).reshape(n, 2 * m)
-        keep = np.stack([inside, cross], axis=2).reshape(n, 2 * m)
+        keep = np.stack([inside & real, cross], axis=2).reshape(n, 2 * m)
         cnt = keep.sum(axis=1)
         order = np.argsort(~keep, axis=1, kind="stable")
         width = max(int(cnt.max()), 3)
@@ -101,9 +106,6 @@ def _clip_cells_dual(Q: np.ndarray, half: np.ndarray, cut_open: bool = True):
         idx = np.minimum(np.arange(width)[None, :], np.maximum(cnt - 1, 0)[:, None])
         poly = np.take_along_axis(out, idx[..., None], axis=1)
         lab = np.take_along_axis(olab, idx, axis=1)
-        # padding repeats the last vertex: close the polygon from it with the last label
-        last = np.take_along_axis(olab, np.maximum(cnt - 1, 0)[:, None], axis=1)
-        lab = np.where(np.arange(width)[None, :] >= (cnt - 1)[:, None], last, lab)
     # Walk the cnt real vertices of each cell. An edge on bisector j whose neighbour edge
     # lies on the bounding square is a ray of an open (boundary) cell: it is cut at the
     # midpoint q_j / 2 of the primal edge, so that the dual length and the area are those
@@ -382,12 +384,17 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
 _NORMAL_K = 12  # neighbours of the first (PCA) normal estimate
 
 
-def _tangent_frames(N: np.ndarray) -> np.ndarray:
-    """(n, 3, 2): an orthonormal basis of the plane normal to each unit row of ``N``."""
+def _tangent_frames(nb: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """(n, 3, 2): orthonormal basis of the plane normal to each unit row of ``N``, along the
+    principal directions of the neighbour offsets ``nb`` (n, k, 3) projected onto it (the
+    clipping square then lies along the star's extent)."""
     a = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
     e1 = np.cross(N, a)
     e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
-    return np.stack([e1, np.cross(N, e1)], axis=2)
+    E = np.stack([e1, np.cross(N, e1)], axis=2)
+    Q = np.einsum("nki,nij->nkj", nb, E)
+    _, R = np.linalg.eigh(np.einsum("nki,nkj->nij", Q, Q))
+    return np.einsum("nij,njk->nik", E, R)
 
 
 def _fan_normals(nb: np.ndarray, Q: np.ndarray, dual: np.ndarray, N: np.ndarray) -> np.ndarray:
@@ -425,10 +432,10 @@ def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_ope
     c = nb[:, :kn] - nb[:, :kn].mean(axis=1, keepdims=True)
     _, U = np.linalg.eigh(np.einsum("nki,nkj->nij", c, c))
     half = 1.5 * d[:, min(7, d.shape[1] - 1)]
-    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(U[:, :, 0]))
+    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(nb, U[:, :, 0]))
     _, dual, _ = _clip_cells_dual(Q, half, cut_open)
     N = _fan_normals(nb, Q, dual, U[:, :, 0])
-    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(N))
+    Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(nb, N))
     area, dual, is_open = _clip_cells_dual(Q, half, cut_open)
     dist = np.linalg.norm(nb, axis=2)
     w = np.where((dual > 0) & (dist > 0), dual / np.where(dist > 0, dist, 1.0), 0.0)
