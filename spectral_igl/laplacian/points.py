@@ -268,12 +268,12 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         a point short of neighbours on one side (sharp tips, anisotropic sampling), is
         clipped by a square of half-side 1.5 times the distance to its 8th neighbour.
         Measured on random points of a flat 2 x 1 rectangle, first 8 Neumann
-        eigenvalues, largest relative error at 4,000 -> 16,000 points: 1.7% -> 0.95% with
-        ``True``, 8.0% -> 4.0% with ``False``. On the vertices of the 11 real shapes of
+        eigenvalues, largest relative error at 4,000 -> 16,000 points: 0.95% -> 0.61% with
+        ``True``, 8.6% -> 4.2% with ``False``. On the vertices of the 11 real shapes of
         ``benchmarks/point_clouds.py`` (median error of 20 eigenvalues against each
         surface's spectrum), ``True`` is better where the mesh has holes or seams
-        (stanford-bunny 1.8% -> 1.0%, suzanne 10.1% -> 9.4%, beetle 6.7% -> 6.4%) and
-        worse on one-sided closed samplings (cow 5.9% -> 6.7%, rocker-arm 2.9% -> 3.3%).
+        (stanford-bunny 1.75% -> 0.76%, beetle 6.1% -> 5.9%) and worse on one-sided
+        closed samplings (cow 6.0% -> 7.5%, rocker-arm 2.8% -> 3.6%).
 
     Returns
     -------
@@ -287,13 +287,13 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     The intrinsic dimension is taken to be 2 (points on a surface). Measured on the unit
     sphere (first 16 nonzero eigenvalues against :math:`l(l+1)`, largest relative error,
     4,000 -> 16,000 points; ``benchmarks/point_clouds.py``): ``"delaunay"`` 0.41% ->
-    0.11% on a Fibonacci sampling, 1.6% -> 0.62% uniformly random, 1.8% -> 0.57% with
+    0.11% on a Fibonacci sampling, 1.6% -> 0.62% uniformly random, 1.8% -> 0.53% with
     density ratio 3, with 7 nonzeros per row of L (robust_laplacian: 0.67% -> 0.16%,
     6.4% -> 7.6%, 6.5% -> 11%, 7 per row); ``"belkin"`` 10.1% -> 10.2%, 7.2% -> 2.4%,
     8.7% -> 2.5% with 65--69 per row. On the vertices of 11 real shapes, against the
     spectrum of each mesh's surface, ``"delaunay"`` is at or below robust_laplacian on
     10 (0.17% against 4.2% on armadillo, 1.5% against 10.2% on fandisk) and above it on
-    beetle (6.7% against 5.1%), a car body whose panels are cut by seams a third of an
+    beetle (6.1% against 5.1%), a car body whose panels are cut by seams a third of an
     edge wide: the points see one surface where the mesh has two free boundaries. Coincident points are allowed (neighbours at
     distance 0; ``"delaunay"`` gives a coincident pair no weight between them). Points
     whose neighbourhoods do not connect form separate components.
