@@ -1,8 +1,13 @@
-"""Heat-geodesic precompute time against libigl and potpourri3d, and one Cholesky of B + tL.
+"""Heat-geodesic precompute and per-source solve time against libigl and potpourri3d, and one
+Cholesky of B + tL.
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/geodesic_precompute.py [--meshes DIR] [--repeat 3]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/geodesic_precompute.py [--meshes DIR] [--repeat 5]
 
-Each mesh is scaled to unit area; each time is the best of ``--repeat`` runs in this process.
+Each mesh is scaled to unit area. Each time is the median of ``--repeat`` runs in this
+process, the contenders taking turns within each repetition (the machine's load drifts; a
+ratio compares runs made seconds apart). ``solve`` is one single-source distance (ours:
+``HeatGeodesics.compute``; libigl: ``heat_geodesics_solve``): the mean over ``--sources``
+sources in a row, median over the repetitions.
 """
 from __future__ import annotations
 
@@ -20,20 +25,18 @@ from spectral_igl.linalg import factorize
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def best(fn, repeat):
-    out = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        out = min(out, time.perf_counter() - t0)
-    return out
+def timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return time.perf_counter() - t0, out
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", type=Path, default=ROOT.parent / "shared" / "data" / "meshes")
-    ap.add_argument("--names", default="cow.obj,homer.obj,fandisk.obj,rocker-arm.obj,armadillo.obj")
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--names", default="cow.obj,spot.obj,homer.obj,fandisk.obj,rocker-arm.obj,armadillo.obj")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--sources", type=int, default=40)
     args = ap.parse_args()
     import igl
 
@@ -41,25 +44,38 @@ def main():
         import potpourri3d as pp3d
     except ImportError:
         pp3d = None
-    print("| mesh | n | spectral_igl (s) | libigl (s) | potpourri3d (s) | ours ÷ libigl | ours ÷ Cholesky |")
-    print("|---|---|---|---|---|---|---|")
+    print("| mesh | n | spectral_igl (s) | libigl (s) | potpourri3d (s) | ours ÷ libigl | ours ÷ Cholesky "
+          "| solve: ours (ms) | solve: libigl (ms) | solve ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name in args.names.split(","):
         V, F = read_mesh(args.meshes / name)
         lap0 = sig.laplacian(V, F, mass="lumped")
         V = V / np.sqrt(lap0.area())
         lap = sig.laplacian(V, F, mass="lumped")
         h = float(igl.avg_edge_length(V, F))
-        ours = best(lambda: HeatGeodesics(lap), args.repeat)
 
         def libigl():
             data = igl.HeatGeodesicsData()
             igl.heat_geodesics_precompute(V, F, h * h, data)
+            return data
 
-        theirs = best(libigl, args.repeat)
-        pp = best(lambda: pp3d.MeshHeatMethodDistanceSolver(V, F), args.repeat) if pp3d else float("nan")
-        chol = best(lambda: factorize(lap.B + h * h * lap.L), args.repeat)
-        print(f"| {name} | {lap.n:,} | {ours:.3f} | {theirs:.3f} | {pp:.3f} | {ours / theirs:.2f} | "
-              f"{ours / chol:.2f} |", flush=True)
+        T = {k: [] for k in ("ours", "libigl", "pp3d", "chol", "s_ours", "s_libigl")}
+        sources = np.random.default_rng(0).choice(lap.n, args.sources, replace=False)
+        for r in range(args.repeat):
+            dt, hg = timed(lambda: HeatGeodesics(lap))
+            T["ours"].append(dt)
+            dt, data = timed(libigl)
+            T["libigl"].append(dt)
+            if pp3d is not None:
+                T["pp3d"].append(timed(lambda: pp3d.MeshHeatMethodDistanceSolver(V, F))[0])
+            T["chol"].append(timed(lambda: factorize(lap.B + h * h * lap.L))[0])
+            T["s_ours"].append(timed(lambda: [hg.compute(int(s)) for s in sources])[0] / len(sources))
+            T["s_libigl"].append(timed(lambda: [igl.heat_geodesics_solve(data, np.array([s]))
+                                                for s in sources])[0] / len(sources))
+        m = {k: float(np.median(v)) if v else float("nan") for k, v in T.items()}
+        print(f"| {name} | {lap.n:,} | {m['ours']:.3f} | {m['libigl']:.3f} | {m['pp3d']:.3f} | "
+              f"{m['ours'] / m['libigl']:.2f} | {m['ours'] / m['chol']:.2f} | {1e3 * m['s_ours']:.2f} | "
+              f"{1e3 * m['s_libigl']:.2f} | {m['s_ours'] / m['s_libigl']:.2f} |", flush=True)
 
 
 if __name__ == "__main__":

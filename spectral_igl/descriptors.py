@@ -73,7 +73,8 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
-    Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices, share one set of poles
+    Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices or for 8 times
+    or more, share one set of poles
     (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
     as one time, each time with its own certified bound (``kernel_diagonal`` options other
     than ``tol`` select the one-time-at-a-time path).
@@ -103,15 +104,20 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
 
 def _family(lap, method, count, kwargs) -> bool:
     """Whether several filters go through the common-pole diagonals: ``"selinv"``, or
-    ``"auto"`` above the dense limit (where factorizations, not the fits, dominate; below it
-    ``"auto"`` keeps the one-filter-at-a-time results)."""
+    ``"auto"`` above the dense limit or for :data:`FAMILY_MIN` filters or more (below both,
+    a few filters one at a time cost less than fitting common poles)."""
     from .diagonal import EXACT_MAX, selinv_supported
 
     if count < 2 or method not in ("auto", "selinv") or set(kwargs) - {"tol"}:
         return False
-    if method == "auto" and lap.n <= EXACT_MAX:
+    if method == "auto" and lap.n <= EXACT_MAX and count < FAMILY_MIN:
         return False
     return selinv_supported(lap, heat(1.0))
+
+
+#: smallest number of scales for which ``method="auto"`` fits common poles on small shapes
+#: (WKS at 100 energies on a 2.9k-vertex mesh: 4.1 s, against 18.8 s one energy at a time)
+FAMILY_MIN = 8
 
 
 def _wks_filter(e, sigma):
@@ -121,7 +127,10 @@ def _wks_filter(e, sigma):
             ls = np.log(np.where(s > 0, s, np.finfo(float).tiny))
         return np.where(s > 0, np.exp(-((e - ls) ** 2) / (2.0 * sigma ** 2)), 0.0)
 
-    return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=False, key=("wks", e, sigma))
+    # singular: a log-normal band, 0 on ker L by definition (the engine's convention for
+    # singular filters) and analytic only away from s = 0, so it is fitted on [lambda_2, b]
+    return Filter(psi, name=f"wks({e:g},{sigma:g})", singular=True, kind="wks",
+                  params={"e": e, "sigma": sigma}, key=("wks", e, sigma))
 
 
 #: Rademacher probes of the trace estimate of the WKS normaliser (full mass, large n)

@@ -17,7 +17,9 @@ import numpy as np
 
 from ._validate import as_delta, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
-from .diagonal import EXACT_MAX, check_diagonal_options, kernel_diagonal, low_rank, phi_values, selinv_kernel
+from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
+                       phi_values, selinv_kernel, selinv_supported)
+from .diagonal.selinv import NoSelinv
 from .diagonal.multiscale import heat_columns
 from .filters import (
     biharmonic,
@@ -160,13 +162,19 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
 
     # one-to-all: column of G, diagonal of G
     G2 = filt.square
+    e = np.zeros((n, 1))
+    e[s] = 1.0
+    if (diagonal in ("auto", "selinv") and selinv_supported(lap, G2, delta)
+            and not heat_projection_applies(lap, G2)):
+        try:      # the column in the diagonal's pass over the poles: one factor held at a time
+            selinv_kernel(lap, G2, tol).prime(e if delta == "mass" else e * lap.mass[:, None])
+        except NoSelinv:
+            pass
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
                                   engine_method=method, return_info=True, progress=progress)
     diag = np.real(diag)
     info.update(dinfo)
-    e = np.zeros((n, 1))
-    e[s] = 1.0
     if dinfo["method"] == "selinv":
         # the column from the same approximation R as the diagonal: d^2 is then R's own
         # squared distance, |d^2 - d_R^2| <= eps ||B^-1(e_i - e_s)||_B^2 <= 2 (bound_i + bound_s)

@@ -240,8 +240,9 @@ def mexican_hat(t, form: str = "tse") -> Filter:
     t = as_positive(t, "t")
     if form == "survey":
         def fn(s):
-            u = t * np.maximum(np.asarray(s, dtype=float), 0.0)
-            return np.sqrt(u) * np.exp(-u * u)
+            with np.errstate(divide="ignore", over="ignore"):   # in logs: no inf * 0 at huge ts
+                u = np.minimum(t * np.maximum(np.asarray(s, dtype=float), 0.0), 1e300)
+                return np.where(u > 0, np.exp(0.5 * np.log(u) - u * u), 0.0)
         return Filter(fn, name="mexican_hat_survey", kind="mexican_hat_survey", params={"t": t},
                       square=lambda: Filter(lambda s: t * np.maximum(s, 0.0) * np.exp(-2.0 * (t * s) ** 2),
                                             name="mexican_hat_survey^2",

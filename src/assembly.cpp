@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 namespace nb = nanobind;
@@ -284,25 +285,44 @@ nb::tuple intrinsic_flips(InF2 l_, InI2 F_) {
     size_t flips = 0;
     {
         nb::gil_scoped_release release;
-        // twin halfedges: h = 3 f + i is the edge opposite corner i of face f
-        std::vector<std::pair<std::pair<int64_t, int64_t>, int64_t>> keys(3 * m);
+        // twin halfedges: h = 3 f + i is the edge opposite corner i of face f. The
+        // halfedges are bucketed by their smaller vertex (a counting sort, in order of h),
+        // then matched by the larger one within each bucket
+        int64_t nv = 0;
+        for (size_t k = 0; k < 3 * m; ++k) nv = std::max(nv, Fo[k] + 1);
+        std::vector<int64_t> bptr(nv + 1, 0), bkt(3 * m), other(3 * m);
         for (size_t f = 0; f < m; ++f)
             for (int i = 0; i < 3; ++i) {
                 int64_t a = Fo[3 * f + (i + 1) % 3], b = Fo[3 * f + (i + 2) % 3];
-                keys[3 * f + i] = {{std::min(a, b), std::max(a, b)}, (int64_t)(3 * f + i)};
+                bptr[std::min(a, b) + 1]++;
+                other[3 * f + i] = std::max(a, b);
             }
-        std::sort(keys.begin(), keys.end());
+        for (int64_t v = 0; v < nv; ++v) bptr[v + 1] += bptr[v];
+        {
+            std::vector<int64_t> pos(bptr.begin(), bptr.end() - 1);
+            for (size_t f = 0; f < m; ++f)
+                for (int i = 0; i < 3; ++i) {
+                    int64_t a = Fo[3 * f + (i + 1) % 3], b = Fo[3 * f + (i + 2) % 3];
+                    bkt[pos[std::min(a, b)]++] = int64_t(3 * f + i);
+                }
+        }
         std::vector<int64_t> twin(3 * m, -1);
-        for (size_t s = 0; s < keys.size();) {
-            size_t e = s;
-            while (e < keys.size() && keys[e].first == keys[s].first) ++e;
-            if (e - s == 2) {
-                twin[keys[s].second] = keys[s + 1].second;
-                twin[keys[s + 1].second] = keys[s].second;
-            } else if (e - s > 2) {
-                for (size_t k = s; k < e; ++k) twin[keys[k].second] = -2;   // non-manifold
+        std::vector<std::pair<int64_t, int64_t>> group;
+        for (int64_t v = 0; v < nv; ++v) {
+            group.clear();
+            for (int64_t k = bptr[v]; k < bptr[v + 1]; ++k) group.push_back({other[bkt[k]], bkt[k]});
+            std::sort(group.begin(), group.end());
+            for (size_t s0 = 0; s0 < group.size();) {
+                size_t e = s0;
+                while (e < group.size() && group[e].first == group[s0].first) ++e;
+                if (e - s0 == 2) {
+                    twin[group[s0].second] = group[s0 + 1].second;
+                    twin[group[s0 + 1].second] = group[s0].second;
+                } else if (e - s0 > 2) {
+                    for (size_t k = s0; k < e; ++k) twin[group[k].second] = -2;   // non-manifold
+                }
+                s0 = e;
             }
-            s = e;
         }
         std::vector<int64_t> stack;
         std::vector<char> queued(3 * m, 0);
@@ -357,12 +377,111 @@ nb::tuple intrinsic_flips(InF2 l_, InI2 F_) {
     return nb::make_tuple(lo_, Fo_, flips);
 }
 
+// Sum of per-triangle 3 x 3 element matrices W[f] placed at the vertices F[f]: the (n, n)
+// CSR arrays (indptr, indices, data) with sorted rows, duplicates summed in face order, and
+// every diagonal entry stored (a zero at vertices no face references).
+nb::tuple element_sum(InF3 W_, InI2 F_, int64_t n) {
+    const size_t m = F_.shape(0);
+    const double *W = W_.data();
+    const int64_t *F = F_.data();
+    std::vector<int64_t> cnt(n + 1, 0);
+    for (size_t k = 0; k < 3 * m; ++k) cnt[F[k] + 1] += 3;
+    for (int64_t i = 0; i < n; ++i) cnt[i + 1] += cnt[i] + 1;   // + 1: the diagonal
+    const int64_t total = cnt[n];
+    std::vector<int64_t> col(total);
+    std::vector<double> val(total);
+    std::vector<int64_t> pos(cnt.begin(), cnt.end() - 1);
+    {
+        nb::gil_scoped_release release;
+        for (int64_t i = 0; i < n; ++i) { col[pos[i]] = i; val[pos[i]++] = 0.0; }
+        for (size_t f = 0; f < m; ++f)
+            for (int a = 0; a < 3; ++a) {
+                int64_t i = F[3 * f + a];
+                for (int b = 0; b < 3; ++b) {
+                    col[pos[i]] = F[3 * f + b];
+                    val[pos[i]++] = W[9 * f + 3 * a + b];
+                }
+            }
+    }
+    // sort each row by column (stably: duplicates are summed in face order) and merge
+    std::vector<int64_t> rowptr(n + 1, 0);
+    std::vector<std::pair<int64_t, double>> row;
+    int64_t q = 0;
+    {
+        nb::gil_scoped_release release;
+        for (int64_t i = 0; i < n; ++i) {
+            row.clear();
+            for (int64_t k = cnt[i]; k < cnt[i + 1]; ++k) row.push_back({col[k], val[k]});
+            if (row.size() <= 64) {   // insertion sort (stable) of a typical short row
+                for (size_t a = 1; a < row.size(); ++a) {
+                    auto x = row[a];
+                    size_t b = a;
+                    for (; b > 0 && row[b - 1].first > x.first; --b) row[b] = row[b - 1];
+                    row[b] = x;
+                }
+            } else {
+                std::stable_sort(row.begin(), row.end(),
+                                 [](const auto &x, const auto &y) { return x.first < y.first; });
+            }
+            for (size_t k = 0; k < row.size();) {
+                int64_t c = row[k].first;
+                double v = 0.0;
+                for (; k < row.size() && row[k].first == c; ++k) v += row[k].second;
+                col[q] = c;
+                val[q++] = v;
+            }
+            rowptr[i + 1] = q;
+        }
+    }
+    if (q >= (int64_t(1) << 31)) throw std::overflow_error("element_sum: more than 2^31 entries");
+    int32_t *ip = new int32_t[n + 1];
+    nb::capsule oip(ip, [](void *p) noexcept { delete[] static_cast<int32_t *>(p); });
+    int32_t *ix = new int32_t[std::max<int64_t>(q, 1)];
+    nb::capsule oix(ix, [](void *p) noexcept { delete[] static_cast<int32_t *>(p); });
+    OutF data = make_array({size_t(q)});
+    for (int64_t i = 0; i <= n; ++i) ip[i] = int32_t(rowptr[i]);
+    for (int64_t k = 0; k < q; ++k) { ix[k] = int32_t(col[k]); data.data()[k] = val[k]; }
+    size_t sp[1] = {size_t(n + 1)}, sx[1] = {size_t(q)};
+    return nb::make_tuple(nb::ndarray<nb::numpy, int32_t>(ip, 1, sp, oip),
+                          nb::ndarray<nb::numpy, int32_t>(ix, 1, sx, oix), data);
+}
+
+// The heat method's middle step on per-triangle hat gradients (gx, gy) (m, 3) in each
+// triangle's frame: X_f = -grad u / |grad u| on each face (zero where grad u vanishes) and
+// its integrated divergence div[v] = sum_f A_f X_f . grad phi_v, returned as (n,).
+OutF normalized_gradient_divergence(InF1 u_, InF2 gx_, InF2 gy_, InF1 A_, InI2 F_) {
+    const size_t m = F_.shape(0), n = u_.shape(0);
+    OutF div_ = make_array({n});
+    const double *u = u_.data(), *gx = gx_.data(), *gy = gy_.data(), *A = A_.data();
+    const int64_t *F = F_.data();
+    double *div = div_.data();
+    nb::gil_scoped_release release;
+    for (size_t f = 0; f < m; ++f) {
+        const int64_t *c = F + 3 * f;
+        const double *x = gx + 3 * f, *y = gy + 3 * f;
+        double sx = 0.0, sy = 0.0;
+        for (int a = 0; a < 3; ++a) { sx += x[a] * u[c[a]]; sy += y[a] * u[c[a]]; }
+        double nrm = std::sqrt(sx * sx + sy * sy);
+        if (!(nrm > 0)) continue;
+        double w = -A[f] / nrm;
+        sx *= w;
+        sy *= w;
+        for (int a = 0; a < 3; ++a) div[c[a]] += sx * x[a] + sy * y[a];
+    }
+    return div_;
+}
+
 NB_MODULE(_assembly, m) {
     m.doc() = "Compiled per-element kernels of spectral_igl's Laplacian constructors.";
     m.def("anisotropic_faces", &anisotropic_faces, nb::arg("V"), nb::arg("F"), nb::arg("alpha"),
           "(kappa (m, 2), dirs (m, 2, 3), K (m, 3, 3)) of a clean triangle mesh.");
     m.def("clip_cells", &clip_cells, nb::arg("Q"), nb::arg("half"),
           "(n,) tangent-plane Voronoi cell areas of the origin among Q (n, k, 2).");
+    m.def("normalized_gradient_divergence", &normalized_gradient_divergence, nb::arg("u"), nb::arg("gx"),
+          nb::arg("gy"), nb::arg("A"), nb::arg("F"),
+          "(n,) divergence of -grad u / |grad u| integrated over the faces, from hat gradients gx, gy (m, 3).");
+    m.def("element_sum", &element_sum, nb::arg("W"), nb::arg("F"), nb::arg("n"),
+          "(indptr, indices, data) of the (n, n) CSR sum of element matrices W (m, 3, 3) at F (m, 3).");
     m.def("intrinsic_flips", &intrinsic_flips, nb::arg("l"), nb::arg("F"),
           "(l, F, flips) of the intrinsic Delaunay triangulation of edge lengths l (m, 3), F (m, 3).");
 }

@@ -7,8 +7,8 @@
 // symmetric with a definite real or imaginary part (L - zB with z off the real spectrum),
 // whose leading principal minors never vanish. A zero pivot raises.
 //
-// Python computes the fill-reducing ordering (METIS nested dissection) and checks every
-// input; Symbolic postorders the elimination tree, finds relaxed supernodes and the
+// Python chooses the fill-reducing ordering (METIS nested dissection, or the minimum
+// degree of minimum_degree.hpp) and checks every input; Symbolic postorders the elimination tree, finds relaxed supernodes and the
 // assembly maps once per sparsity pattern; Factor<T> factorizes values on that pattern.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -21,6 +21,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "minimum_degree.hpp"
 
 namespace nb = nanobind;
 using cplx = std::complex<double>;
@@ -574,6 +576,25 @@ NB_MODULE(_ldlt, mod) {
             std::vector<int32_t> p(s.perm.begin(), s.perm.end());
             return to_numpy<int32_t>(std::move(p), {size_t(s.n)});
         });
+    mod.def("minimum_degree",
+            [](In1<int32_t> indptr, In1<int32_t> indices) {
+                const i64 n = i64(indptr.shape(0)) - 1;
+                if (n < 0) throw std::invalid_argument("indptr must have n + 1 entries");
+                const int32_t *ip = indptr.data(), *ix = indices.data();
+                if (ip[n] > i64(indices.shape(0))) throw std::invalid_argument("indptr[n] exceeds indices");
+                for (i64 k = 0; k < ip[n]; ++k)
+                    if (ix[k] < 0 || ix[k] >= n) throw std::invalid_argument("indices out of range");
+                std::vector<i64> p;
+                {
+                    nb::gil_scoped_release rel;
+                    p = mindeg::order<int32_t>(n, ip, ix);
+                }
+                std::vector<int32_t> out(p.begin(), p.end());
+                return to_numpy<int32_t>(std::move(out), {size_t(n)});
+            },
+            nb::arg("indptr"), nb::arg("indices"),
+            "Minimum-degree ordering (perm[q] = original index) of the pattern of A + A^T "
+            "(CSC; diagonal and duplicates ignored).");
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

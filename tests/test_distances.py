@@ -212,3 +212,20 @@ def test_survey_mexican_hat_distance_against_dense(lap_torus):
     ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, 5, False), 0))
     d = sig.spectral_distance(lap, filt, 5)
     assert np.abs(d - ref).max() <= 1e-6 * ref.max()
+
+
+@pytest.mark.parametrize("name,dist,fn,singular", [d for d in NAMED if d[0] in ("diffusion", "mexican_hat")],
+                         ids=["diffusion", "mexican_hat"])
+def test_one_to_all_selinv_streams_its_factors(name, dist, fn, singular):
+    """Through the selected inverse, the column and the diagonal's check come from the
+    diagonal's single pass over the poles: the complex factorizations are not kept, and a
+    second source (factorizing again) agrees with the dense truth just as well."""
+    lap = sig.laplacian(*torus(18, 9, jitter=0.3, seed=11))
+    for s in (13, 90):
+        ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, s, singular), 0))
+        d, info = dist(lap, s, diagonal="selinv", return_info=True)
+        assert info["method"] == "selinv"
+        assert np.abs(d - ref).max() <= 1e-7 * ref.max()
+        if s == 13:
+            kept = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
+            assert kept == []

@@ -69,8 +69,8 @@ def test_flat_patch_converges_symmetric_debiased():
     q = int(np.argmin(np.abs(d - 6 * h)))
     b = bump(V, F, q, 1.5 * h)[0]
     with pytest.warns(RuntimeWarning, match="10 h"):  # 1e-2 < 10 h^2 = 0.022 here
-        w01, info = wasserstein_distance(lap, a, b, 1e-2, return_info=True)
-        w10 = wasserstein_distance(lap, b, a, 1e-2)
+        w01, info = wasserstein_distance(lap, a, b, 1e-2, kernel="heat", return_info=True)
+        w10 = wasserstein_distance(lap, b, a, 1e-2, kernel="heat")
     assert info["converged"] and info["marginal_error"].max() < 1e-9
     assert abs(w01 - w10) < 1e-3 * w01
     g = 10 * h * h
@@ -85,21 +85,23 @@ def test_flat_patch_converges_symmetric_debiased():
 
 
 @pytest.mark.parametrize("name", ["cow.obj", "spot.obj"])
-def test_bumps_near_geodesic_at_10h2_on_real_shapes(name):
+def test_bumps_near_geodesic_on_real_shapes(name):
     V, F = read_shared_mesh(name)
     V = unit_area(V, F)
     lap = sig.laplacian(V, F)
     h = mean_edge_length(V, F)
     p = int(np.argmin(np.linalg.norm(V - V.mean(0), axis=1)))
     a, d = bump(V, F, p, h)
-    for r in (6.0, 8.0):
+    # the default (geodesic) kernel at every distance and gamma; the heat kernel out to 8h
+    for r, kernel, ratio in ((4.0, "auto", 10), (8.0, "auto", 10), (20.0, "auto", 10), (30.0, "auto", 40),
+                             (6.0, "heat", 10), (8.0, "heat", 10)):
         q = int(np.argmin(np.abs(d - r * h)))
         b = bump(V, F, q, h)[0]
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            w = wasserstein_distance(lap, a, b, 10 * h * h)
-        assert abs(w - d[q]) < 0.1 * d[q], (r, w, d[q])
-        assert abs(w - wasserstein_distance(lap, b, a, 10 * h * h)) < 1e-3 * w
+            w = wasserstein_distance(lap, a, b, ratio * h * h, kernel=kernel)
+        assert abs(w - d[q]) < 0.1 * d[q], (r, kernel, w, d[q])
+        assert abs(w - wasserstein_distance(lap, b, a, ratio * h * h, kernel=kernel)) < 1e-3 * w
 
 
 def test_dirac_limit_is_geodesic(sphere):
@@ -170,4 +172,11 @@ def test_validation(sphere):
         wasserstein_barycenter(lap, np.c_[mu, mu], 0.1, weights=[1, -1])
     h = mean_edge_length(V, lap.data["F"])
     with pytest.warns(RuntimeWarning, match="10 h"):
-        wasserstein_distance(lap, mu, mu, 5 * h * h)
+        wasserstein_distance(lap, mu, mu, 5 * h * h, kernel="heat")
+    with pytest.warns(RuntimeWarning, match="mean edge length"):
+        wasserstein_distance(lap, mu, mu, 0.5 * h * h, kernel="geodesic", max_iter=2)
+    with pytest.raises(ValueError, match="kernel"):
+        wasserstein_distance(lap, mu, mu, 0.1, kernel="gauss")
+    pts = sig.point_cloud_laplacian(V)
+    with pytest.raises(ValueError, match="kernel='heat'"):
+        wasserstein_distance(pts, mu, mu, 0.1, kernel="geodesic")

@@ -8,7 +8,7 @@ from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive,
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
-from ..laplacian.intrinsic import intrinsic_delaunay
+from ..laplacian.intrinsic import element_sum, intrinsic_delaunay, normalized_gradient_divergence
 from ..laplacian.mesh import element_measures
 from ..linalg import factorize, ldlt
 from ..progress import progress_bar
@@ -32,6 +32,21 @@ def mean_edge_length(V, C=None) -> float:
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
+def _frame_gradients(l: np.ndarray):
+    """(gx, gy) (m, 3) of the three hat functions and the areas (m,), in each triangle's frame."""
+    l0, l1, l2 = l[:, 0], l[:, 1], l[:, 2]
+    x = (l1 ** 2 + l2 ** 2 - l0 ** 2) / (2.0 * l2)
+    y = np.sqrt(np.maximum(l1 ** 2 - x ** 2, 0.0))
+    A = 0.5 * l2 * y
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv2A = np.where(A > 0, 1.0 / (2.0 * A), 0.0)
+    # corners at (0, 0), (l2, 0), (x, y); grad of hat a is the edge b -> c turned by 90°
+    # and divided by 2A: (-e_y, e_x) / 2A with e = P_c - P_b
+    ex = np.stack([x - l2, -x, l2], axis=1)        # a = 0: P2 - P1, a = 1: P0 - P2, a = 2: P1 - P0
+    ey = np.stack([y, -y, np.zeros_like(y)], axis=1)
+    return -ey * inv2A[:, None], ex * inv2A[:, None], A
+
+
 def _triangle_gradients(l: np.ndarray, F: np.ndarray, n: int):
     """Gradient operator (2m, n) and areas (m,) of triangles given by edge lengths.
 
@@ -40,25 +55,22 @@ def _triangle_gradients(l: np.ndarray, F: np.ndarray, n: int):
     of a piecewise-linear function is expressed in that frame, which is all the heat
     method needs (it only normalises and integrates against the same operator).
     """
-    l0, l1, l2 = l[:, 0], l[:, 1], l[:, 2]
-    x = (l1 ** 2 + l2 ** 2 - l0 ** 2) / (2.0 * l2)
-    y = np.sqrt(np.maximum(l1 ** 2 - x ** 2, 0.0))
-    P = np.stack([np.zeros((len(F), 2)), np.c_[l2, np.zeros(len(F))], np.c_[x, y]], axis=1)
-    A = 0.5 * l2 * y
+    gx, gy, A = _frame_gradients(l)
+    return _gradient_matrix(gx, gy, F, n), A
+
+
+def _gradient_matrix(gx, gy, F, n):
+    # rows f (x) and m + f (y) hold the three corners of face f: CSR directly, no sorting
     m = len(F)
-    rows, cols, vals = [], [], []
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv2A = np.where(A > 0, 1.0 / (2.0 * A), 0.0)
-    for a in range(3):
-        b, c = (a + 1) % 3, (a + 2) % 3
-        e = P[:, c] - P[:, b]
-        gx, gy = -e[:, 1] * inv2A, e[:, 0] * inv2A
-        rows += [np.arange(m), m + np.arange(m)]
-        cols += [F[:, a], F[:, a]]
-        vals += [gx, gy]
-    G = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(2 * m, n))
-    return G, A
+    cols = np.ascontiguousarray(np.r_[F, F], dtype=np.int32).ravel()
+    return sp.csr_matrix((np.r_[gx, gy].ravel(), cols, np.arange(0, 6 * m + 1, 3, dtype=np.int32)),
+                         shape=(2 * m, n))
+
+
+def _stiffness(gx, gy, A, F, n):
+    r""":math:`G^\top \mathrm{diag}(A, A) G` assembled per triangle, every diagonal entry stored."""
+    W = (gx[:, :, None] * gx[:, None, :] + gy[:, :, None] * gy[:, None, :]) * A[:, None, None]
+    return element_sum(W, F, n)
 
 
 def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
@@ -77,13 +89,21 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
         Per-triangle gradient, x rows then y rows, in each triangle's own frame.
     A : (m,) float
         Triangle areas.
-    L : (n, n) sparse
-        Stiffness :math:`G^	op \mathrm{diag}(A, A)\, G`, positive semi-definite.
+    L : (n, n) sparse csr
+        Stiffness :math:`G^\top \mathrm{diag}(A, A)\, G`, positive semi-definite, in
+        canonical form with every diagonal entry stored (zero at unreferenced vertices).
     M : (n, n) sparse diagonal
         Lumped (barycentric) mass: a third of the incident triangle areas.
     h : float
         Mean edge length of the intrinsic triangulation.
     """
+    gx, gy, A, Fi, L, M, h = _intrinsic_parts(V, F, mollify)
+    return _gradient_matrix(gx, gy, Fi, V.shape[0]), A, L, M, h
+
+
+def _intrinsic_parts(V, F, mollify):
+    """(gx, gy, A, Fi, L, M, h): intrinsic_operators' results with the per-face hat gradients
+    (gx, gy) (m, 3) and the flipped faces Fi in place of the assembled gradient."""
     import igl
 
     n = V.shape[0]
@@ -95,13 +115,27 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
         delta = max(0.0, float(np.max(eps - margin)))
         l = l + delta
     l, Fi = intrinsic_delaunay(l, F)
-    G, A = _triangle_gradients(l, Fi, n)
+    gx, gy, A = _frame_gradients(l)
     h = float(l.mean())
-    AA = sp.diags(np.r_[A, A])
-    L = (G.T @ AA @ G).tocsr()
+    L = _stiffness(gx, gy, A, Fi, n)
     mass = np.bincount(Fi.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
     mass[mass <= 0] = float(mass[mass > 0].mean()) if np.any(mass > 0) else 1.0
-    return G, A, L, sp.diags(mass).tocsr(), h
+    return gx, gy, A, Fi, L, sp.diags(mass).tocsr(), h
+
+
+def _with_diagonal(L) -> sp.csr_matrix:
+    """``L`` in canonical CSR with every diagonal entry stored (explicit zeros added)."""
+    L = sp.csr_matrix(L)
+    n = L.shape[0]
+    if L.has_canonical_format:
+        rows = np.repeat(np.arange(n), np.diff(L.indptr))
+        if np.count_nonzero(L.indices == rows) == n:
+            return L
+    C = L.tocoo()
+    ar = np.arange(n)
+    out = sp.csr_matrix((np.r_[C.data, np.zeros(n)], (np.r_[C.row, ar], np.r_[C.col, ar])), shape=L.shape)
+    out.sum_duplicates()
+    return out
 
 
 def _as_laplacian(lap_or_mesh, mass: str = "lumped") -> Laplacian:
@@ -191,35 +225,51 @@ class HeatGeodesics:
         bar = progress_bar(3, "heat geodesics", progress, unit="step")
         bar.set_postfix_str("operators")
         if step == "intrinsic_delaunay":
-            self.G, self.A, Lp, M, self.h = intrinsic_operators(V, C, mollify=self.mollify)
+            gx, gy, self.A, Fi, Lp, M, self.h = _intrinsic_parts(V, C, self.mollify)
+            self.G = _gradient_matrix(gx, gy, Fi, self.n)
+            self._hats = (gx, gy, Fi)
             self._dim = 2
             Lh = Lp
         else:
             Vg = V if V.shape[1] == 3 else np.c_[V, np.zeros(len(V))]
             self.G = igl.grad(np.ascontiguousarray(Vg), C).tocsr()
             self._dim = self.G.shape[0] // C.shape[0]
+            self._hats = None
             self.A = element_measures(V, C)
             Lp = Lh = lap.L
             M = sp.diags(lap.mass).tocsr()
             self.h = mean_edge_length(V, C)
         self.t = self.h ** 2 if t is None else as_positive(t, "t")
+        self._GT = self.G.T
         bar.update()
         bar.set_postfix_str("heat factorization")
         # Poisson solve: ground one vertex per component (the rhs is consistent)
         ground = np.unique(lap.components, return_index=True)[1]
+        self._fixed = ground
         self._free = np.setdiff1d(np.arange(self.n), ground)
         if step != "engine" and ldlt.available():
             # M + tL and the grounded L (its grounded rows and columns replaced by the
-            # identity's) have the pattern of L + M: one ordering and symbolic analysis,
-            # two numeric LDLᵀ factorizations
-            pattern = ldlt.Pattern((abs(Lh) + M).tocsc())
-            self._heat = ldlt.LDLT((M + self.t * Lh).tocsc(), pattern)
+            # identity's) are stored on the pattern of L with its whole diagonal: one
+            # ordering and symbolic analysis, two numeric LDLᵀ factorizations. The ordering
+            # is minimum degree (compiled): nested dissection costs more than both numeric
+            # factorizations together here, for a factor of about the same size
+            S = _with_diagonal(Lh)
+            # intrinsic_operators' L is exactly symmetric: its CSR arrays are its CSC arrays
+            S = (sp.csc_matrix((S.data, S.indices, S.indptr), shape=S.shape)
+                 if step == "intrinsic_delaunay" else S.tocsc())
+            col = np.repeat(np.arange(self.n), np.diff(S.indptr))
+            diag = np.flatnonzero(S.indices == col)   # one per column, in column order
+            pattern = ldlt.Pattern(S, ordering="minimum_degree")
+            vals = self.t * S.data
+            vals[diag] += M.diagonal()
+            self._heat = ldlt.LDLT(sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape), pattern)
             bar.update()
             bar.set_postfix_str("Poisson factorization")
-            keep = np.ones(self.n)
-            keep[ground] = 0.0
-            K = sp.diags(keep)
-            Lg = (K @ Lp @ K + sp.diags(1.0 - keep)).tocsc()
+            keep = np.ones(self.n, dtype=bool)
+            keep[ground] = False
+            vals = np.where(keep[S.indices] & keep[col], S.data, 0.0)
+            vals[diag[ground]] = 1.0
+            Lg = sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape)
             self._poisson, self._grounded = ldlt.LDLT(Lg, pattern), True
             bar.update()
             bar.close()
@@ -248,26 +298,63 @@ class HeatGeodesics:
         delta = np.zeros(self.n)
         delta[src] = 1.0
         u = self._diffuse(delta)
-        g = (self.G @ u).reshape(self._dim, -1).T
-        norm = np.linalg.norm(g, axis=1)
-        X = np.zeros_like(g)
-        ok = norm > 0
-        X[ok] = -g[ok] / norm[ok, None]
-        div = self.G.T @ (X * self.A[:, None]).T.ravel()
+        if self._hats is not None:
+            gx, gy, Fi = self._hats
+            return self._integrate(normalized_gradient_divergence(u, gx, gy, self.A, Fi), src)
+        g = (self.G @ u).reshape(self._dim, -1)           # (dim, m): x row, y row (, z row)
+        norm = np.sqrt(np.einsum("ij,ij->j", g, g))
+        # X = -∇u / |∇u| (zero where ∇u vanishes), integrated against the element measures
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.where(norm > 0, -self.A / norm, 0.0)
+        g *= w
+        return self._integrate(self._GT @ g.ravel(), src)
+
+    def _integrate(self, div: np.ndarray, src: np.ndarray) -> np.ndarray:
         phi = np.zeros(self.n)
         if self._grounded:
-            fixed = np.setdiff1d(np.arange(self.n), self._free)
-            div[fixed] = 0.0
+            div[self._fixed] = 0.0
             phi = self._poisson.solve(div)
-            phi[fixed] = 0.0
+            phi[self._fixed] = 0.0
         else:
             phi[self._free] = self._poisson.solve(div[self._free])
+        if len(self._fixed) == 1:                       # one connected component
+            phi -= phi[src].mean()
+            return phi
         comps = self.lap.components
         out = np.full(self.n, np.inf)
         for c in np.unique(comps[src]):
             mask = comps == c
             s = src[comps[src] == c]
             out[mask] = phi[mask] - phi[s].mean()
+        return out
+
+
+    def compute_each(self, sources, block: int = 256) -> np.ndarray:
+        """(n, s) geodesic distances, column k from ``sources[k]`` alone: the solves of a
+        block of sources together (``inf`` outside each source's component)."""
+        src = as_indices(sources, self.n, "sources").reshape(-1)
+        out = np.empty((self.n, src.size))
+        comps = self.lap.components
+        for a in range(0, src.size, block):
+            s = src[a:a + block]
+            k = s.size
+            delta = np.zeros((self.n, k))
+            delta[s, np.arange(k)] = 1.0
+            u = self._diffuse(delta)
+            g = (self.G @ u).reshape(self._dim, -1, k)
+            norm = np.sqrt(np.sum(g * g, axis=0))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                X = np.where(norm > 0, -g / norm, 0.0) * self.A[None, :, None]
+            div = self.G.T @ X.reshape(-1, k)
+            if self._grounded:
+                div[self._fixed] = 0.0
+                phi = self._poisson.solve(div)
+                phi[self._fixed] = 0.0
+            else:
+                phi = np.zeros((self.n, k))
+                phi[self._free] = self._poisson.solve(div[self._free])
+            same = comps[:, None] == comps[s][None, :]
+            out[:, a:a + k] = np.where(same, phi - phi[s, np.arange(k)][None, :], np.inf)
         return out
 
 

@@ -1,4 +1,5 @@
-"""Entropic optimal transport with the heat kernel (convolutional Wasserstein distance)."""
+"""Entropic optimal transport: the heat kernel (convolutional Wasserstein distance) or the
+Gaussian of geodesic distances."""
 from __future__ import annotations
 
 import warnings
@@ -7,9 +8,70 @@ import numpy as np
 
 from .._validate import as_int, as_positive, as_signal, as_tol, describe
 from ..laplacian import as_laplacian
+from .geodesics import HeatGeodesics
 from .heat_steps import PositiveHeat
 
-__all__ = ["wasserstein_distance", "sinkhorn", "wasserstein_barycenter"]
+__all__ = ["wasserstein_distance", "sinkhorn", "wasserstein_barycenter", "GeodesicKernel", "KERNELS",
+           "GEODESIC_MAX"]
+
+#: ``kernel`` choices of the transport functions
+KERNELS = ("auto", "geodesic", "heat")
+#: largest vertex count for which ``kernel="auto"`` uses the (dense) geodesic kernel
+GEODESIC_MAX = 5000
+
+
+class GeodesicKernel:
+    r"""The Gaussian of geodesic distances, :math:`K_{ij} = e^{-d_{ij}^2/\gamma}\,a_j`, dense.
+
+    :math:`d` is the heat-method geodesic distance (:class:`~.geodesics.HeatGeodesics`,
+    every vertex a source, symmetrised), cached on the Laplacian for every ``gamma``;
+    :math:`a` the lumped vertex areas. Unlike a mesh heat kernel, it is Gaussian in
+    :math:`d` at every distance, so the entropic cost it defines is :math:`d^2` up to
+    the heat method's error. Memory and time per application are :math:`O(n^2)`.
+    """
+
+    def __init__(self, lap, gamma: float):
+        lap = as_laplacian(lap)
+        if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
+            raise ValueError(f"the geodesic kernel needs a triangle or tetrahedral mesh, got a {lap.domain} "
+                             "Laplacian; use kernel='heat'")
+        self.n, self.gamma = lap.n, float(gamma)
+        self.mass = np.asarray(lap.B.sum(axis=1)).ravel()
+        D = lap.cache.fetch("kernel", ("all_pairs_geodesic",), lambda: _all_pairs(lap))
+        with np.errstate(over="ignore"):
+            self.logK = -(D * D) / self.gamma
+        finite = np.isfinite(self.logK)
+        # a dense product is exact enough while no kernel entry underflows
+        self.dense = bool(np.all(self.logK[finite] > -700.0))
+        self.K = np.exp(self.logK) * self.mass[None, :] if self.dense else None
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """:math:`K X`."""
+        if self.K is not None:
+            return self.K @ X
+        return np.exp(self.log_apply(np.log(np.maximum(X, 0.0))))
+
+    def log_apply(self, logX: np.ndarray) -> np.ndarray:
+        r"""Column-wise :math:`\log K e^{X}`: a dense product with each column's largest
+        value factored out, or log-sum-exp where kernel entries would underflow."""
+        if self.K is not None:
+            m = np.max(np.where(np.isfinite(logX), logX, -np.inf), axis=0)
+            m = np.where(np.isfinite(m), m, 0.0)
+            Y = self.K @ np.exp(logX - m)
+            return np.log(np.maximum(Y, _TINY)) + m
+        from scipy.special import logsumexp
+
+        la = np.log(self.mass)
+        return np.stack([logsumexp(self.logK + (logX[:, j] + la)[None, :], axis=1)
+                         for j in range(logX.shape[1])], axis=1)
+
+
+def _all_pairs(lap):
+    D = HeatGeodesics(lap).compute_each(np.arange(lap.n))
+    D = np.maximum(0.5 * (D + D.T), 0.0)
+    np.fill_diagonal(D, 0.0)
+    return D
+
 
 _TINY = np.finfo(float).tiny
 
@@ -26,22 +88,21 @@ def _density(lap, mu, name, mass):
     return mu / total
 
 
-def _heat(lap, gamma, heat, steps):
-    if heat is None:
-        return PositiveHeat(lap, gamma / 4.0, steps=steps)
-    if not isinstance(heat, PositiveHeat) or heat.n != lap.n:
-        raise TypeError(f"heat must be a PositiveHeat of this Laplacian, got {describe(heat)}")
-    if not np.isclose(heat.t, gamma / 4.0, rtol=1e-12):
-        raise ValueError(f"heat has t = {heat.t:g}, but gamma / 4 = {gamma / 4.0:g}")
-    return heat
-
-
-def _log_apply(heat, logX):
-    """Column-wise log K exp(logX), the largest value of each column factored out."""
-    m = np.max(np.where(np.isfinite(logX), logX, -np.inf), axis=0)
-    m = np.where(np.isfinite(m), m, 0.0)
-    Y = heat.apply(np.exp(logX - m))
-    return np.log(np.maximum(Y, _TINY)) + m
+def _kernel(lap, gamma, kernel, steps, heat=None):
+    """The transport kernel: a given PositiveHeat, or by ``kernel`` (see :data:`KERNELS`)."""
+    if heat is not None:
+        if not isinstance(heat, PositiveHeat) or heat.n != lap.n:
+            raise TypeError(f"heat must be a PositiveHeat of this Laplacian, got {describe(heat)}")
+        if not np.isclose(heat.t, gamma / 4.0, rtol=1e-12):
+            raise ValueError(f"heat has t = {heat.t:g}, but gamma / 4 = {gamma / 4.0:g}")
+        return heat
+    if not isinstance(kernel, str) or kernel not in KERNELS:
+        raise ValueError(f"kernel must be one of {KERNELS}, got {describe(kernel)}")
+    as_int(steps, "steps", lo=1, hi=10 ** 4)
+    meshed = lap.domain in ("triangle", "tet") and "V" in lap.data
+    if kernel == "geodesic" or (kernel == "auto" and meshed and lap.n <= GEODESIC_MAX):
+        return GeodesicKernel(lap, gamma)
+    return PositiveHeat(lap, gamma / 4.0, steps=steps)
 
 
 def _log(mu):
@@ -59,14 +120,14 @@ def _sinkhorn_block(heat, A, B, gamma, max_iter, tol):
     err = np.full(A.shape[1], np.inf)
     it = 0
     for it in range(1, int(max_iter) + 1):
-        kw = _log_apply(heat, logw)
+        kw = heat.log_apply(logw)
         # first-marginal error of the current pair (the second is exact after each update)
         marg = np.where(sA, np.exp(np.where(sA, logv + kw, -np.inf)), 0.0)
         err = a @ np.abs(marg - A)
         if np.all(err < tol):
             break
         logv = np.where(sA, logA - kw, -np.inf)
-        logw = np.where(sB, logB - _log_apply(heat, logv), -np.inf)
+        logw = np.where(sB, logB - heat.log_apply(logv), -np.inf)
     value = gamma * (a @ (A * np.where(sA, logv, 0.0)) + a @ (B * np.where(sB, logw, 0.0)))
     return value, {"iterations": it, "marginal_error": err, "converged": bool(np.all(err < tol)),
                    "logv": logv, "logw": logw}
@@ -77,19 +138,22 @@ def _check_iter(max_iter, tol):
     return as_tol(tol, "tol")
 
 
-def sinkhorn(lap, mu0, mu1, gamma, heat=None, steps: int = 16, max_iter: int = 5000,
+def sinkhorn(lap, mu0, mu1, gamma, heat=None, kernel: str = "auto", steps: int = 16, max_iter: int = 5000,
              tol: float = 1e-9):
     r"""Entropic transport between densities ``mu0`` and ``mu1`` (Solomon et al. 2015).
 
-    Sinkhorn iterations on log-potentials with the heat kernel :math:`K` at
-    :math:`t = \gamma/4` (so that :math:`K(x, y) \propto e^{-d(x, y)^2/\gamma}`):
+    Sinkhorn iterations on log-potentials with a kernel :math:`K(x, y) \propto
+    e^{-d(x, y)^2/\gamma}`:
 
     .. math:: v \leftarrow \mu_0 / K w, \qquad w \leftarrow \mu_1 / K v
 
-    :math:`K` is applied by :class:`~spectral_igl.applications.heat_steps.PositiveHeat`
-    (``steps`` backward-Euler steps with a Metzler stiffness and the lumped mass), which
-    is positive and relatively accurate however small the kernel, so the iterations
-    converge to round-off.
+    ``kernel="heat"``: the heat kernel at :math:`t = \gamma/4`, applied by
+    :class:`~spectral_igl.applications.heat_steps.PositiveHeat` (``steps`` backward-Euler
+    steps with a Metzler stiffness and the lumped mass; positive and relatively accurate
+    however small the kernel); Gaussian in d only out to a few :math:`t/h`.
+    ``kernel="geodesic"``: :class:`GeodesicKernel`, the Gaussian of heat-method geodesic
+    distances, dense. ``"auto"``: geodesic on triangle and tet meshes of at most
+    :data:`GEODESIC_MAX` vertices, else heat.
 
     Parameters
     ----------
@@ -99,9 +163,11 @@ def sinkhorn(lap, mu0, mu1, gamma, heat=None, steps: int = 16, max_iter: int = 5
     gamma : float
         Entropic regularisation, length squared.
     heat : PositiveHeat, optional
-        The kernel at :math:`t = \gamma/4`, to reuse across calls.
+        A heat kernel at :math:`t = \gamma/4`, to reuse across calls (``kernel`` is then ignored).
+    kernel : {"auto", "geodesic", "heat"}
+        See above.
     steps : int
-        Backward-Euler steps of the kernel when ``heat`` is not given.
+        Backward-Euler steps of the heat kernel.
     max_iter, tol
         Iterations and tolerance on the :math:`L^1` marginal error.
 
@@ -116,7 +182,7 @@ def sinkhorn(lap, mu0, mu1, gamma, heat=None, steps: int = 16, max_iter: int = 5
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
-    heat = _heat(lap, gamma, heat, steps)
+    heat = _kernel(lap, gamma, kernel, steps, heat)
     mu0 = _density(lap, mu0, "mu0", heat.mass)
     mu1 = _density(lap, mu1, "mu1", heat.mass)
     value, info = _sinkhorn_block(heat, mu0[:, None], mu1[:, None], gamma, max_iter, tol)
@@ -133,9 +199,9 @@ def _mean_edge(lap):
     return None
 
 
-def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 5000,
+def wasserstein_distance(lap, mu0, mu1, gamma, kernel: str = "auto", steps: int = 16, max_iter: int = 5000,
                          tol: float = 1e-9, return_info: bool = False):
-    r"""Debiased entropic 2-Wasserstein distance (Sinkhorn divergence), with the heat kernel.
+    r"""Debiased entropic 2-Wasserstein distance (Sinkhorn divergence).
 
     .. math::
         W_\gamma(\mu_0, \mu_1) = \Big(S_\gamma(\mu_0, \mu_1)
@@ -156,10 +222,15 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
         Non-negative densities per unit area (normalised here so that
         :math:`\int \mu\, dA = 1` with the lumped areas).
     gamma : float
-        Entropic regularisation, in units of length squared; the kernel is the heat
-        kernel at :math:`t = \gamma/4`.
+        Entropic regularisation, in units of length squared: the kernel is
+        :math:`\propto e^{-d^2/\gamma}`.
+    kernel : {"auto", "geodesic", "heat"}
+        ``"geodesic"``: :class:`GeodesicKernel` (dense, accurate at every distance);
+        ``"heat"``: the heat kernel at :math:`t = \gamma/4` (sparse, Solomon et al.'s
+        convolutional transport; see the notes for its accuracy); ``"auto"``: geodesic on
+        triangle and tet meshes of at most :data:`GEODESIC_MAX` vertices, else heat.
     steps : int, default 16
-        Backward-Euler steps of the kernel (:class:`~spectral_igl.applications.heat_steps.PositiveHeat`).
+        Backward-Euler steps of the heat kernel (:class:`~spectral_igl.applications.heat_steps.PositiveHeat`).
     max_iter, tol
         Sinkhorn iterations and tolerance on the :math:`L^1` marginal error.
     return_info : bool
@@ -170,12 +241,21 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
     -------
     float, or (float, dict)
 
-    Warns when ``gamma`` is below :math:`10 h^2` (``h`` the mean edge length of a
-    triangle or tet mesh), or when the iterations did not converge in ``max_iter``.
+    Warns when the heat kernel is used with ``gamma`` below :math:`10 h^2` (``h`` the mean
+    edge length of a triangle or tet mesh), or when the iterations did not converge in
+    ``max_iter``.
 
     Notes
     -----
-    *Where it is accurate.* For narrow bumps the divergence is Varadhan's estimate
+    *The geodesic kernel* (the default up to :data:`GEODESIC_MAX` vertices) is Gaussian in
+    the heat method's distance at every distance, so what remains is that distance's own
+    error (a few percent). Measured as below: :math:`W/d - 1` from -4.2% to 0.0% at
+    :math:`d` = 4h to 30h on cow and spot, at :math:`\gamma = 10h^2` and :math:`40h^2`
+    alike; -3% to -2% at 4h to 12h on the unit square (bumps farther from its centre are
+    cut by its boundary). 0.13-0.30 s per call at n = 3k, after the all-pairs distances
+    (about 3 s once per shape, cached).
+
+    *Where the heat kernel is accurate.* For narrow bumps the divergence is Varadhan's estimate
     :math:`-\gamma\log\big(K(p,q)/\sqrt{K(p,p)K(q,q)}\big)`, which needs the discrete heat
     kernel to be Gaussian out to the bumps' distance :math:`d`. On a mesh it is Gaussian
     only up to :math:`d \approx` a few :math:`t/h`: beyond, every sparse operator's
@@ -193,12 +273,15 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    heat = _kernel(lap, gamma, kernel, steps)
     h = _mean_edge(lap)
-    if h is not None and gamma < 10.0 * h * h * (1 - 1e-12):
+    if isinstance(heat, PositiveHeat) and h is not None and gamma < 10.0 * h * h * (1 - 1e-12):
         warnings.warn(f"gamma = {gamma:.3g} is below 10 h^2 = {10 * h * h:.3g} (h = {h:.3g} the mean "
                       "edge length): the discrete heat kernel is far from its smooth limit at "
                       "t = gamma/4", RuntimeWarning, stacklevel=2)
-    heat = PositiveHeat(lap, gamma / 4.0, steps=steps)
+    elif h is not None and gamma < h * h * (1 - 1e-12):
+        warnings.warn(f"gamma = {gamma:.3g} is below h^2 = {h * h:.3g} (h = {h:.3g} the mean edge length): "
+                      "the kernel's width is below the mesh's resolution", RuntimeWarning, stacklevel=2)
     mu0 = _density(lap, mu0, "mu0", heat.mass)
     mu1 = _density(lap, mu1, "mu1", heat.mass)
     A = np.c_[mu0, mu0, mu1]
@@ -215,7 +298,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, steps: int = 16, max_iter: int = 
     return w
 
 
-def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
+def wasserstein_barycenter(lap, mus, gamma, weights=None, kernel: str = "auto", steps: int = 16,
                            max_iter: int = 5000, tol: float = 1e-7, return_info: bool = False):
     r"""Entropic Wasserstein barycentre of densities (Solomon et al. 2015, Algorithm 2).
 
@@ -224,7 +307,7 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
     solved by the iterative Bregman projections of Solomon et al., on log-potentials:
     :math:`w_i \leftarrow \mu_i / K v_i`, :math:`d_i \leftarrow v_i\, K w_i`,
     :math:`\mu \leftarrow \prod_i d_i^{\alpha_i}`, :math:`v_i \leftarrow v_i\,\mu / d_i`,
-    with the positive heat kernel of :func:`sinkhorn` at :math:`t = \gamma/4`.
+    with the kernel of :func:`sinkhorn` (``kernel``, ``steps`` as there).
 
     Parameters
     ----------
@@ -235,8 +318,10 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
         Entropic regularisation (length squared).
     weights : (k,) float, optional
         Non-negative barycentric weights :math:`\alpha`, normalised to sum 1; default equal.
-    steps, max_iter, tol
-        Kernel steps, iterations, tolerance on :math:`\max_i \int |d_i - \mu|\,dA`.
+    kernel, steps
+        As in :func:`sinkhorn`.
+    max_iter, tol
+        Iterations, tolerance on :math:`\max_i \int |d_i - \mu|\,dA`.
     return_info : bool
         Also return ``iterations``, ``error`` and ``converged``.
 
@@ -259,7 +344,7 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
         if alpha.shape != (k,) or not np.all(np.isfinite(alpha)) or np.any(alpha < 0) or alpha.sum() <= 0:
             raise ValueError(f"weights must be {k} non-negative numbers with a positive sum, got {describe(weights)}")
         alpha = alpha / alpha.sum()
-    heat = PositiveHeat(lap, gamma / 4.0, steps=steps)
+    heat = _kernel(lap, gamma, kernel, steps)
     a = heat.mass
     mus = np.stack([_density(lap, mus[:, i], f"mus[:, {i}]", a) for i in range(k)], axis=1)
     logmus = _log(mus)
@@ -267,8 +352,8 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, steps: int = 16,
     logmu = np.zeros(lap.n)
     err, it = np.inf, 0
     for it in range(1, int(max_iter) + 1):
-        logw = np.where(mus > 0, logmus - _log_apply(heat, logv), -np.inf)
-        logd = logv + _log_apply(heat, logw)
+        logw = np.where(mus > 0, logmus - heat.log_apply(logv), -np.inf)
+        logd = logv + heat.log_apply(logw)
         logmu = logd @ alpha
         err = float(np.max(a @ np.abs(np.exp(logd) - np.exp(logmu)[:, None])))
         logv = logv + logmu[:, None] - logd

@@ -4,7 +4,10 @@ Two kinds of scalar error bounds are proved here:
 
 - :func:`certified_sup`: :math:`\max_{[a,b]}|e|` for :math:`e = \varphi - r` from samples
   and a rigorous bound of :math:`|e''|` between them (linear interpolation error
-  :math:`h^2\max|e''|/8`), plus an allowance for the rounding of each sample;
+  :math:`h^2\max|e''|/8`), plus an allowance for the rounding of each sample. The bound of
+  :math:`|e''|` is :func:`interpolated_d2` when :math:`e''` can be evaluated: sampled at
+  Chebyshev points of each interval, so it sees the cancellation between φ and r that a
+  bound of :math:`|\varphi''| + |r''|` cannot;
 - :func:`ellipse_tails`: the tail :math:`\sum_{k>m}|c_k|` of the Chebyshev series of an
   analytic function on [a, b], from its maximum on a Bernstein ellipse
   (:math:`|c_k| \le 2M\rho^{-k}`).
@@ -121,6 +124,143 @@ def certified_sup(err, d2, a: float, b: float, target: float = 0.0, n: int = 200
     return bound
 
 
+def sampled_error(fn, approx, a: float, b: float) -> float:
+    """:func:`sup_error` of ``fn - approx`` on [a, b] (an estimate), scaled by the sampled
+    maximum of ``fn``: what an unproved plan reports at least, so that a filter the
+    approximation never saw (a bump between its interpolation points) is not called exact."""
+    lo = a if a > 0 else b * 1e-14
+    xs = np.unique(np.concatenate([np.geomspace(lo, b, 400), np.linspace(a, b, 400)]))
+    with np.errstate(all="ignore"):
+        scale = float(np.max(np.abs(fn(xs))))
+        return sup_error(lambda s: fn(s) - approx(s), a, b, scale=scale if np.isfinite(scale) else None)
+
+
+def interpolated_d2(e2, ellipse2, m: int = 8, loose=None, chunk: int = 20_000):
+    r"""``d2(lo, hi)`` for :func:`certified_sup` from :math:`e''` itself.
+
+    On each interval, :math:`e''` is sampled at the m + 1 Chebyshev points; its interpolant
+    p satisfies :math:`|p| \le \Lambda_m \max_k|e''(x_k)|` with the Lebesgue constant
+    :math:`\Lambda_m \le 1 + \tfrac{2}{\pi}\log(m + 1)` (Trefethen, ATAP Thm 15.2), and
+    :math:`|e'' - p| \le 4M\rho^{-m}/(\rho - 1)` where M bounds :math:`|e''|` on the
+    Bernstein ellipse :math:`E_\rho` of the interval (ATAP Thm 8.2). So
+
+    .. math:: \max_{[lo, hi]}|e''| \le \Lambda_m \max_k \bigl(|e''(x_k)| + 64\varepsilon\,
+              \mathrm{mag}_k\bigr) + \min_\rho 4M(\rho)\rho^{-m}/(\rho - 1).
+
+    ``e2(x)`` returns ``(e''(x), mag)`` (mag: the sum of the magnitudes of the terms, as in
+    :func:`certified_sup`); ``ellipse2(lo, hi, rho)`` bounds :math:`|e''|` on
+    :math:`E_\rho` of each interval (``inf`` where a singularity may lie inside). ``loose``
+    (optional, same signature as the result) is another valid bound; the smaller is kept.
+    """
+    nodes = np.cos(np.pi * np.arange(m + 1) / m)
+    lebesgue = 1.0 + 2.0 / np.pi * np.log(m + 1.0)
+    rhos = (1.5, 3.0, 8.0, 32.0, 128.0)
+
+    def d2(lo, hi):
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        out = np.empty(lo.shape)
+        for s in range(0, lo.size, chunk):
+            l, h = lo.ravel()[s:s + chunk], hi.ravel()[s:s + chunk]
+            c, d = 0.5 * (l + h), 0.5 * (h - l)
+            x = c[:, None] + d[:, None] * nodes[None, :]
+            with np.errstate(all="ignore"):
+                v, mag = e2(x.ravel())
+                top = np.max(np.abs(v).reshape(x.shape) + 64 * EPS * np.abs(mag).reshape(x.shape), axis=1)
+                rem = np.full(l.shape, np.inf)
+                for rho in rhos:
+                    M = np.asarray(ellipse2(l, h, rho), dtype=float)
+                    rem = np.minimum(rem, 4.0 * M * rho ** (-m) / (rho - 1.0))
+                b = lebesgue * top + rem
+                b = np.where(np.isnan(b), np.inf, b)
+                if loose is not None:
+                    b = np.minimum(b, np.asarray(loose(l, h), dtype=float))
+            out.ravel()[s:s + chunk] = b
+        return out
+    return d2
+
+
+def ellipse_box(lo, hi, rho):
+    r"""Half-axes of the Bernstein ellipse :math:`E_\rho` of each [lo, hi]: it lies in the box
+    :math:`[c - A, c + A] \times [-B, B]`, returned as ``(c, A, B)``."""
+    c, d = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    return c, d * 0.5 * (rho + 1.0 / rho), d * 0.5 * (rho - 1.0 / rho)
+
+
+def filter_second(filt):
+    r"""``phi2(x)``: :math:`\varphi''` on real x > 0 for the built-in filters, or None."""
+    kind, p = filt.kind, filt.params
+    if kind == "heat":
+        t = p["t"]
+        return lambda x: t * t * np.exp(-t * x)
+    if kind == "wave":
+        t = p["t"]
+        return lambda x: -t * t * np.exp(-1j * t * x)
+    if kind == "power":
+        q = p["p"]
+        return lambda x: q * (q + 1) * x ** (-(q + 2))
+    if kind == "mexican_hat":
+        t = p["t"]
+        return lambda x: t * t * (t * x - 2.0) * np.exp(-t * x)
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def w2(x):
+            w = np.log(x) - e
+            return np.exp(-w * w / (2 * sg * sg)) * (w * w / sg ** 4 + (w - 1.0) / sg ** 2) / (x * x)
+        return w2
+    if filt.key[0] == ("one",):
+        return lambda x: np.zeros(np.shape(x))
+    return None
+
+
+def filter_d2_ellipse(filt):
+    r"""``bound(lo, hi, rho)``: a bound of :math:`|\varphi''|` on the Bernstein ellipse
+    :math:`E_\rho` of each [lo, hi] (through the box of :func:`ellipse_box`), or None."""
+    kind, p = filt.kind, filt.params
+    if kind == "heat":
+        t = p["t"]
+        return lambda lo, hi, rho: _heat_box(t, *ellipse_box(lo, hi, rho)) * t * t
+    if kind == "wave":
+        t = p["t"]
+        return lambda lo, hi, rho: t * t * np.exp(t * ellipse_box(lo, hi, rho)[2])
+    if kind == "power":
+        q = p["p"]
+
+        def pw(lo, hi, rho):
+            c, A, _ = ellipse_box(lo, hi, rho)
+            left = c - A
+            with np.errstate(all="ignore"):
+                return np.where(left > 0, q * (q + 1) * np.abs(left) ** (-(q + 2)), np.inf)
+        return pw
+    if kind == "mexican_hat":
+        t = p["t"]
+
+        def mh(lo, hi, rho):
+            c, A, _ = ellipse_box(lo, hi, rho)
+            return t * t * (t * (np.abs(c) + A) + 2.0) * _heat_box(t, c, A, None)
+        return mh
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def we(lo, hi, rho):
+            c, A, B = ellipse_box(lo, hi, rho)
+            left = c - A
+            with np.errstate(all="ignore"):
+                theta = np.arctan(B / left)
+                w1, w2 = np.log(left) - e, np.log(np.hypot(c + A, B)) - e
+                return np.where(left > 0, _wks_second_bound(w1, w2, theta, sg) / left ** 2, np.inf)
+        return we
+    if filt.key[0] == ("one",):
+        return lambda lo, hi, rho: np.zeros(np.shape(lo))
+    return None
+
+
+def _heat_box(t, c, A, B):
+    """max of |e^{-tz}| over the box: e^{-t (c - A)} (inf on overflow)."""
+    with np.errstate(over="ignore"):
+        return np.exp(-t * (c - A))
+
+
 def _logt(t):
     return np.log(t)
 
@@ -141,9 +281,26 @@ def filter_d2(filt):
     if kind == "mexican_hat":
         t = p["t"]   # phi'' = t^2 (ts - 2) e^{-ts}
         return lambda lo, hi: np.exp(2 * _logt(t) - t * lo) * (t * hi + 2.0)
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def wk(lo, hi):     # |phi''| <= max g * max |P| / lo^2 over w = log s - e in the interval
+            with np.errstate(all="ignore"):
+                w1, w2 = np.log(lo) - e, np.log(hi) - e
+                return np.where(lo > 0, _wks_second_bound(w1, w2, 0.0, sg) / lo ** 2, np.inf)
+        return wk
     if filt.key[0] == ("one",):
         return lambda lo, hi: np.zeros(np.shape(lo))
     return None
+
+
+def _wks_second_bound(w1, w2, theta, sg):
+    r"""Bound of :math:`|g(w)P(w)|` for :math:`w = x + iy`, x in [w1, w2], :math:`|y| \le \theta`,
+    where :math:`g = e^{-w^2/2\sigma^2}`, :math:`P = w^2/\sigma^4 + w/\sigma^2 - 1/\sigma^2`:
+    the WKS filter's :math:`\varphi''(s) = g(\log s - e) P(\log s - e)/s^2`."""
+    dmin = np.where((w1 <= 0) & (w2 >= 0), 0.0, np.minimum(np.abs(w1), np.abs(w2)))
+    W = np.maximum(np.abs(w1), np.abs(w2)) + theta
+    return np.exp(-(dmin * dmin - theta * theta) / (2 * sg * sg)) * (W * W / sg ** 4 + (W + 1.0) / sg ** 2)
 
 
 def filter_logmax(filt, a: float, b: float):
@@ -175,6 +332,19 @@ def filter_logmax(filt, a: float, b: float):
             A = semi(rho)[0]
             return np.log(t) + np.log(c + A) - t * (c - A)
         return lm
+    if kind == "wks":
+        e, sg = p["e"], p["sigma"]
+
+        def lw(rho):       # |g(log z - e)| <= exp(-(dmin^2 - theta^2) / 2 sigma^2) on the box
+            A, B = semi(rho)
+            left = c - A
+            if not left > 0:
+                return np.inf
+            theta = np.arctan(B / left)
+            w1, w2 = np.log(left) - e, np.log(np.hypot(c + A, B)) - e
+            dmin = 0.0 if w1 <= 0 <= w2 else min(abs(w1), abs(w2))
+            return -(dmin * dmin - theta * theta) / (2 * sg * sg)
+        return lw
     if filt.key[0] == ("one",):
         return lambda rho: 0.0
     return None

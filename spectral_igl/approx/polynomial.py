@@ -12,7 +12,8 @@ import math
 import numpy as np
 
 from ..linalg import mass_solve, shifted_factor
-from .common import EPS, cheb_adaptive, certified_sup, ellipse_tails, filter_logmax, sup_error, tail_sums
+from .common import (EPS, cheb_adaptive, certified_sup, ellipse_tails, filter_logmax, sampled_error, sup_error,
+                     tail_sums)
 
 
 def _ltilde(lap, v, backend):
@@ -58,6 +59,9 @@ class ChebyshevPlan:
         self.m = m
         self.c = c[: m + 1]
         self.scalar_error = float(tails[m + 1] + alias)
+        if not self.proved:   # the coefficients see φ only at Chebyshev points: check between them
+            self.scalar_error = max(self.scalar_error, sampled_error(
+                fn, lambda s: np.polynomial.chebyshev.chebval((2.0 * s - a - b) / (b - a), self.c), a, b))
         self.rounding = 4 * EPS * (m + 1) * float(np.abs(self.c).sum())
         self.n_solves = m
 
@@ -158,6 +162,9 @@ class TaylorPlan:
             if tot <= tol:
                 break
         _, self.m, self.coef, self.scalar_error, self.rounding = best
+        if not self.proved:   # the tails see φ only at Chebyshev points: check between them
+            self.scalar_error = max(self.scalar_error, sampled_error(
+                filt, lambda s: np.polynomial.polynomial.polyval(s, self.coef), a, b))
         self.n_solves = self.m
 
     def apply(self, f, rhs):

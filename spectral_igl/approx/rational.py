@@ -30,7 +30,8 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
-from .common import EPS, bnorm, certified_sup, filter_d2, inv_bnorm_upper, sup_error
+from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2, filter_d2_ellipse, filter_second,
+                     interpolated_d2, inv_bnorm_upper, sup_error)
 
 
 # ----------------------------------------------------------------------------- CF for exp
@@ -184,6 +185,52 @@ class PartialFractions:
                 out = out + 2.0 * abs(c) * np.float64(self.sigma) ** 2 / dist ** 3
         return out
 
+    def _halved(self):
+        """Poles, residues and multiplicities with each conjugate pair as one term (when
+        r is real on the axis a pair contributes twice the real part of one member)."""
+        if self.real_symmetric:
+            c = np.array([t[0] for t in self.terms], dtype=complex)
+            z = np.array([t[1] for t in self.terms], dtype=complex)
+            k = np.array([t[2] for t in self.terms], dtype=float)
+            return c, z, k
+        return self.coef, self.poles, np.ones(self.poles.size)
+
+    def second(self, s):
+        r""":math:`r''(s) = \sum_j 2c_j\sigma^2/(\sigma s - z_j)^3` and the sum of the
+        magnitudes of its terms (the scale of its rounding)."""
+        s = np.asarray(s, dtype=float)
+        flat = s.ravel()
+        c, z, k = self._halved()
+        out = np.empty(flat.size, dtype=float if self.real_symmetric else complex)
+        mag = np.empty(flat.size)
+        wk = 2.0 * np.float64(self.sigma) ** 2 * c * k
+        for j in range(0, flat.size, 4096):
+            with np.errstate(all="ignore"):
+                d = 1.0 / (self.sigma * flat[j:j + 4096, None] - z[None, :])
+                w = (d * d * d) * wk[None, :]
+            out[j:j + 4096] = w.real.sum(axis=1) if self.real_symmetric else w.sum(axis=1)
+            mag[j:j + 4096] = np.abs(w).sum(axis=1)
+        return out.reshape(s.shape), mag.reshape(s.shape)
+
+    def d2_ellipse(self, lo, hi, rho):
+        r"""Bound of :math:`|r''|` on the Bernstein ellipse :math:`E_\rho` of each [lo, hi]:
+        :math:`\sum_j 2|c_j|\sigma^2/\operatorname{dist}(z_j, \sigma E_\rho)^3`, with the
+        distance to the ellipse's box as a lower bound (``inf`` if a pole is in the box)."""
+        c, A, B = ellipse_box(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), rho)
+        sg = abs(self.sigma)
+        coef, z, k = self._halved()      # the box is symmetric: z and its conjugate are as far
+        flat_c, flat_a, flat_b = c.ravel(), A.ravel(), B.ravel()
+        out = np.empty(flat_c.size)
+        w = 2.0 * np.abs(coef) * k * np.float64(sg) ** 2
+        for j in range(0, flat_c.size, 4096):
+            sl = slice(j, j + 4096)
+            with np.errstate(all="ignore"):
+                dx = np.maximum(np.abs(z.real[None, :] - self.sigma * flat_c[sl, None]) - sg * flat_a[sl, None], 0.0)
+                dy = np.maximum(np.abs(z.imag)[None, :] - sg * flat_b[sl, None], 0.0)
+                d2 = dx * dx + dy * dy
+                out[sl] = np.where(d2 > 0, w[None, :] / (d2 * np.sqrt(d2)), np.inf).sum(axis=1)
+        return out.reshape(c.shape)
+
     def amplification(self, a: float, b: float) -> float:
         r""":math:`|\alpha_0| + \sum_j |c_j| / \operatorname{dist}(z_j, \sigma[a, b])`: bounds the B-norm of each term."""
         tot = abs(self.alpha0)
@@ -226,7 +273,15 @@ def certify(pf: PartialFractions, filt, a: float, b: float, target: float = 0.0)
             v = filt(s)
             return v - pf(s), np.abs(v) + pf.magnitude(s)
 
-        return certified_sup(err2, lambda lo, hi: d2(lo, hi) + pf.d2_bound(lo, hi), a, b, target)
+        phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
+
+        def e2(s):
+            v2 = phi2(s)
+            r2, m2 = pf.second(s)
+            return v2 - r2, np.abs(v2) + m2
+
+        tight = interpolated_d2(e2, lambda lo, hi, rho: ell(lo, hi, rho) + pf.d2_ellipse(lo, hi, rho))
+        return certified_sup(err2, tight, a, b, target, n=600)
 
     def err(s):
         return filt(s) - pf(s)

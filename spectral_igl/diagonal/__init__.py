@@ -9,11 +9,11 @@ One-to-all spectral distances and the descriptors need :math:`G_{ii}` at all n v
 - :mod:`.spectral`: the dense eigendecomposition (ground truth) and the truncated baseline;
 - :mod:`.core`: the dispatcher and the ``"exact"`` method (n engine columns).
 """
-from .core import EXACT_MAX, METHODS, check_diagonal_options, kernel_diagonal
+from .core import EXACT_MAX, METHODS, check_diagonal_options, heat_projection_applies, kernel_diagonal
 from .probing import distance_colouring
 from .selinv import SelinvKernel, inverse_mass_diagonal, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal, low_rank, phi_values
 
-__all__ = ["check_diagonal_options", "kernel_diagonal", "METHODS", "EXACT_MAX", "distance_colouring", "SelinvKernel",
+__all__ = ["check_diagonal_options", "heat_projection_applies", "kernel_diagonal", "METHODS", "EXACT_MAX", "distance_colouring", "SelinvKernel",
            "selinv_kernel", "selinv_supported", "inverse_mass_diagonal", "eigen_diagonal",
            "low_rank", "phi_values"]

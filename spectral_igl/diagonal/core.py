@@ -174,6 +174,11 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     return (diag, dict(info)) if return_info else diag
 
 
+def heat_projection_applies(lap, filt) -> bool:
+    """Whether the heat diagonal is taken as the projection onto the constants (a large t)."""
+    return filt.kind == "heat" and filt.params["t"] * lambda_max(lap) > LARGE_T
+
+
 def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed,
               progress=None):
     n = lap.n
@@ -194,7 +199,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         info["k"] = k
         return eigen_diagonal(lap, filt, k, delta), info
 
-    if method in ("auto", "selinv") and filt.kind == "heat" and filt.params["t"] * lambda_max(lap) > LARGE_T:
+    if method in ("auto", "selinv") and heat_projection_applies(lap, filt):
         # heat at a large time is the projection onto the constants of each component:
         # |G_ii - 1/V_c| = sum_{l > c} e^{-t lambda_l} x_l(i)^2 <= e^{-t lambda_2} (B^-1)_ii
         decay = float(np.exp(-filt.params["t"] * lambda_min_positive(lap)))
@@ -212,8 +217,17 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         if not selinv_supported(lap, filt, delta):
             raise ValueError("method='selinv' needs the compiled extension and pymetis, a real filter, "
                              "and a lumped mass for delta='seed'")
+        samples = int(min(max(samples, 0), n))
+        rng = np.random.default_rng(seed)
+        idx = np.sort(rng.choice(n, samples, replace=False))
+        E = np.zeros((n, samples))
+        E[idx, np.arange(samples)] = 1.0
+        if delta == "seed":
+            E *= lap.mass[:, None]
         try:
             kern = selinv_kernel(lap, filt, tol)
+            if samples:
+                kern.prime(E)          # checked with the same factors, in the same pass
             diag, bound = kern.diagonal(progress)
         except NoSelinv as exc:
             if not auto:
@@ -226,14 +240,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
             diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
         info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)),
                     bound_kind=kern.bound_kind)
-        samples = int(min(max(samples, 0), n))
         if samples:     # the selected inversion against solves with the same factors
-            rng = np.random.default_rng(seed)
-            idx = np.sort(rng.choice(n, samples, replace=False))
-            E = np.zeros((n, samples))
-            E[idx, np.arange(samples)] = 1.0
-            if delta == "seed":
-                E *= lap.mass[:, None]
             exact = kern.columns(E)[idx, np.arange(samples)]
             if delta == "seed":
                 exact *= lap.mass[idx]

@@ -39,10 +39,11 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._validate import describe
+from ..approx.common import filter_d2
 from ..approx.rational import PartialFractions, certify, cf_exp, rounding
 from ..filters import Filter, heat
-from ..laplacian import as_laplacian, lambda_max
-from ..linalg import ldlt, ldlt_factor, mass_solve
+from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
+from ..linalg import lambda_min_positive, lambda_min_positive_kind, ldlt, ldlt_factor, mass_solve
 from .selinv import inverse_mass_diagonal
 
 __all__ = ["MultiDiagonal", "family_poles", "heat_poles", "fit_family", "family_diagonals",
@@ -189,7 +190,7 @@ def fit_family(filters, upper, real, a: float, b: float, sigma: float, scales=No
         # r(s) = a0 + sum c/(s - z) = a0 + sum (c sigma)/(sigma s - sigma z)
         pf = PartialFractions(c[0], np.concatenate([cu, np.conj(cu), cr]) * sigma,
                               np.concatenate([upper, np.conj(upper), real]) * sigma, sigma=sigma)
-        rnd = rounding(pf, a, b, b)
+        rnd = rounding(pf, 0.0, b, b)      # over [0, b]: the solves also see ker L
         if targets is not None and sample_err + rnd > targets[k]:
             pf.scalar_error = sample_err
         else:
@@ -268,11 +269,15 @@ class MultiDiagonal:
         :math:`(B^{-1})_{ii}`.
     n_factorizations : int
         Sparse factorizations for the whole family (complex pairs and real poles).
+    bound_kind : {"proof", "estimate"}
+        ``"proof"`` when every member's sup error is proved (built-in filters, WKS
+        included) and the spectrum's enclosure is certified.
     """
 
-    def __init__(self, values, eps, minv, n_factorizations, poles):
+    def __init__(self, values, eps, minv, n_factorizations, poles, bound_kind="proof"):
         self.values, self.eps, self.minv = values, np.asarray(eps, dtype=float), minv
         self.n_factorizations, self.poles = int(n_factorizations), poles
+        self.bound_kind = bound_kind
 
     @property
     def abs_bound(self) -> np.ndarray:
@@ -364,6 +369,9 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
     b = lambda_max(lap)
     targets = np.broadcast_to(np.asarray(targets, dtype=float), (len(filters),))
     filters = list(filters)
+    singular = any(f.singular for f in filters)
+    if singular:    # fitted on [lambda_2, b]; what the fits put on ker L is taken out
+        a = max(a, lambda_min_positive(lap))
     poles_given = poles is not None
     if poles is None:
         rt = max(float(np.min(targets)) * 1e-2, 1e-13)
@@ -386,13 +394,22 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
                  for sl in (slice(0, h), slice(h, None))]
         return MultiDiagonal(np.concatenate([p.values for p in parts], axis=1),
                              np.concatenate([p.eps for p in parts]), parts[0].minv,
-                             sum(p.n_factorizations for p in parts), [p.poles for p in parts])
-    return diagonals_from_fits(lap, upper, real, fits, eps)
+                             sum(p.n_factorizations for p in parts), [p.poles for p in parts],
+                             "proof" if all(p.bound_kind == "proof" for p in parts) else "estimate")
+    out = diagonals_from_fits(lap, upper, real, fits, eps)
+    if singular:
+        out.values -= np.outer(1.0 / lap.component_volume(),
+                               [float(np.real(pf(np.zeros(1))[0])) for pf, _ in fits])
+    proved = (all(filter_d2(f) is not None for f in filters) and lambda_max_kind(lap) == "proof"
+              and (not singular or lambda_min_positive_kind(lap) == "proof"))
+    out.bound_kind = "proof" if proved else "estimate"
+    return out
 
 
 def diagonals_from_fits(lap, upper, real, fits, eps) -> MultiDiagonal:
     """The diagonals of fitted partial fractions with common poles: one factorization and one
-    selected inversion per pole (a conjugate pair counts once), each factor dropped after use."""
+    selected inversion per pole (a conjugate pair counts once), each factor dropped after use.
+    Each member's r puts r(0)/V_c on ker L (the caller takes it out for singular filters)."""
     minv = inverse_mass_diagonal(lap)
     al, C = _coefficients(fits, upper, real)
     D = np.outer(minv, al)

@@ -64,6 +64,7 @@ class SelinvKernel:
         self.power = int(round(p)) if integer and round(p) in (1, 2) else 0
         self.circle = int(round(p)) if integer and round(p) >= 3 else 0
         self._diag = None
+        self._pending, self._done = [], []   # blocks E whose R E the diagonal's pass computes
         self.bound_kind = "proof"
         if self.circle:
             self._circle_setup()
@@ -156,10 +157,10 @@ class SelinvKernel:
         bound = self.q / (1.0 - self.q) * np.abs(diag) / (1.0 - 2.0 * self.q) + 256 * EPS * mag
         return diag, bound
 
-    def _factors(self):
+    def _factors(self, keep: bool = True):
         for c, z, k in self.pf.terms:
             theta = -z.real if z.imag == 0 else -z
-            yield c, k, shifted_factor(self.lap, self.pf.sigma, theta, backend="ldlt")
+            yield c, k, shifted_factor(self.lap, self.pf.sigma, theta, backend="ldlt", keep=keep)
 
     def _kernel_part(self):
         """r(0) / V_c: what r puts on ker L, where a singular filter is 0."""
@@ -179,9 +180,21 @@ class SelinvKernel:
         return Y - self.lap.component_sum(w * Y)
 
     # ----------------------------------------------------------------- public
+    def prime(self, E) -> None:
+        """Have the diagonal's pass (if still to come) also compute R E: each pole's factor
+        serves its selected inversion and its solves and is then dropped, so the pass holds
+        one factorization at a time (a one-to-all distance needs the diagonal and a column,
+        the diagonal's check a few columns)."""
+        if self._diag is None and not (self.circle or self.power):
+            self._pending.append(np.array(E, dtype=float, copy=True))
+
     def columns(self, E):
         """R E for E of shape (n, k)."""
         lap = self.lap
+        for j, (Ej, Rj) in enumerate(self._done):
+            if Ej.shape == np.shape(E) and np.array_equal(Ej, E):
+                del self._done[j]
+                return Rj
         if self.circle:                     # (L~+)^p B^-1 E: p exact pseudo-solves
             u = pseudo_solve(lap, E)
             for _ in range(self.circle - 1):
@@ -210,13 +223,25 @@ class SelinvKernel:
 
     def _rational_diagonal(self, progress=None):
         diag = np.zeros(self.lap.n)
+        blocks, self._pending = self._pending, []
+        E = np.hstack(blocks) if blocks else None
+        out = None if E is None else np.zeros(E.shape)
         with progress_bar(len(self.pf.terms), "kernel diagonal", progress, unit="pole") as bar:
-            for c, k, fac in self._factors():
+            for c, k, fac in self._factors(keep=E is None):
                 diag += k * (c * fac.inverse_diagonal()).real
+                if E is not None:
+                    out += k * (c * fac.solve(E)).real
+                del fac
                 bar.update()
         diag += self.pf.alpha0.real * self.minv
         if self.filt.singular:
             diag -= self._kernel_part()
+        if E is not None:
+            out += self.pf.alpha0.real * mass_solve(self.lap, E, backend="ldlt")
+            if self.filt.singular:
+                out -= self._kernel_part()[:, None] * self.lap.component_sum(E)
+            cuts = np.cumsum([b.shape[1] for b in blocks])[:-1]
+            self._done = list(zip(blocks, np.split(out, cuts, axis=1)))
         return diag, self.eps * self.minv
 
     def _power_diagonal(self):

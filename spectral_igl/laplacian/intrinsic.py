@@ -1,11 +1,13 @@
-"""Intrinsic Delaunay triangulation of a triangle mesh's edge lengths, by compiled edge flips."""
+"""Intrinsic Delaunay triangulation of a triangle mesh's edge lengths, by compiled edge flips,
+and the compiled sum of per-triangle element matrices."""
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from .._validate import describe
 
-__all__ = ["intrinsic_delaunay"]
+__all__ = ["intrinsic_delaunay", "element_sum", "normalized_gradient_divergence"]
 
 
 def intrinsic_delaunay(l, F):
@@ -52,3 +54,106 @@ def intrinsic_delaunay(l, F):
         return np.asarray(out[0]), np.asarray(out[1], dtype=np.int64)
     lo, Fo, _ = intrinsic_flips(l, F)
     return lo, Fo
+
+
+def element_sum(W, F, n: int) -> sp.csr_matrix:
+    r"""Sum of per-triangle element matrices, every diagonal entry stored.
+
+    .. math:: S = \sum_f P_f^\top W_f P_f
+
+    with :math:`P_f` the (3, n) selection of the vertices ``F[f]``. Rows come out sorted,
+    duplicate entries summed in face order (so a symmetric ``W`` gives an exactly symmetric
+    ``S``), and the diagonal is stored at every vertex, as an explicit zero at vertices no
+    face references. Compiled in the package's extension (SciPy's COO conversion where that
+    is not built).
+
+    Parameters
+    ----------
+    W : (m, 3, 3) float
+        ``W[f, a, b]``: the entry for the corners ``a, b`` of face ``f``.
+    F : (m, 3) int
+        Vertex indices in ``[0, n)``.
+    n : int
+
+    Returns
+    -------
+    (n, n) sparse csr, canonical.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> W = np.ones((2, 3, 3))
+    >>> S = element_sum(W, np.array([[0, 1, 2], [0, 2, 3]]), 5)
+    >>> S.toarray()[0].tolist(), S.nnz, float(S[4, 4])
+    ([2.0, 1.0, 2.0, 1.0, 0.0], 15, 0.0)
+    """
+    W = np.ascontiguousarray(W, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    n = int(n)
+    if F.ndim != 2 or F.shape[1] != 3 or W.shape != (len(F), 3, 3):
+        raise ValueError(f"W must have shape (m, 3, 3) and F (m, 3), got {describe(W)} and {describe(F)}")
+    if F.size and (F.min() < 0 or F.max() >= n):
+        raise ValueError(f"F must index vertices in [0, {n}), got indices in [{F.min()}, {F.max()}]")
+    try:
+        from ._assembly import element_sum as compiled
+    except ImportError:   # pragma: no cover - the extension is built with the package
+        ar = np.arange(n)
+        rows = np.r_[np.repeat(F, 3, axis=1).ravel(), ar]
+        cols = np.r_[np.tile(F, (1, 3)).ravel(), ar]
+        S = sp.csr_matrix((np.r_[W.ravel(), np.zeros(n)], (rows, cols)), shape=(n, n))
+        S.sum_duplicates()
+        return S
+    indptr, indices, data = compiled(W, F, n)
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def normalized_gradient_divergence(u, gx, gy, A, F) -> np.ndarray:
+    r"""Integrated divergence of the normalised negative gradient of a piecewise-linear ``u``.
+
+    .. math:: d_v = \sum_f A_f\, X_f \cdot \nabla\phi_v|_f, \qquad
+              X_f = -\nabla u|_f / |\nabla u|_f| \ (0 \text{ where } \nabla u|_f = 0)
+
+    The middle step of the heat method, on gradients given per triangle in any frame of
+    its own (compiled; one pass over the faces).
+
+    Parameters
+    ----------
+    u : (n,) float
+    gx, gy : (m, 3) float
+        Components of the gradients of the three hat functions of each face.
+    A : (m,) float
+        Face areas.
+    F : (m, 3) int
+        Vertex indices in ``[0, n)`` (not checked here: this is a per-solve kernel).
+
+    Returns
+    -------
+    (n,) float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> gx, gy = np.array([[-1.0, 1.0, 0.0]]), np.array([[-1.0, 0.0, 1.0]])   # right triangle
+    >>> normalized_gradient_divergence(np.array([0.0, 1.0, 0.0]), gx, gy, np.array([0.5]),
+    ...                                np.array([[0, 1, 2]])).tolist()
+    [0.5, -0.5, 0.0]
+    """
+    u = np.ascontiguousarray(u, dtype=np.float64)
+    gx = np.ascontiguousarray(gx, dtype=np.float64)
+    gy = np.ascontiguousarray(gy, dtype=np.float64)
+    A = np.ascontiguousarray(A, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    m = len(F)
+    if u.ndim != 1 or F.shape != (m, 3) or gx.shape != (m, 3) or gy.shape != (m, 3) or A.shape != (m,):
+        raise ValueError(f"expected u (n,), gx, gy, F (m, 3) and A (m,), got {describe(u)}, {describe(gx)}, "
+                         f"{describe(gy)}, {describe(A)} and {describe(F)}")
+    try:
+        from ._assembly import normalized_gradient_divergence as compiled
+    except ImportError:   # pragma: no cover - the extension is built with the package
+        ug = u[F]
+        sx, sy = (gx * ug).sum(axis=1), (gy * ug).sum(axis=1)
+        nrm = np.hypot(sx, sy)
+        w = -A / np.where(nrm > 0, nrm, np.inf)
+        return np.bincount(F.ravel(), weights=((sx * w)[:, None] * gx + (sy * w)[:, None] * gy).ravel(),
+                           minlength=len(u))
+    return compiled(u, gx, gy, A, F)

@@ -3,7 +3,7 @@ r"""The engine's sparse linear algebra: factorizations, grounded pseudo-solves, 
 - :mod:`.factor`: ``factorize(A)`` over the backends (CHOLMOD through cholespy, MKL PARDISO
   through pypardiso, the package's LDLᵀ, SuperLU);
 - :mod:`.ldlt`: the supernodal LDLᵀ with selected inversion (compiled), on a METIS
-  nested-dissection ordering;
+  nested-dissection or a minimum-degree ordering;
 - :mod:`.solves`: cached factorizations of :math:`\theta B + \beta L` for one
   :class:`~spectral_igl.Laplacian`, the one grounding rule and the pseudo-inverse solves;
 - :mod:`.eigen`: generalized eigenpairs (the truncated baseline and the dense ground truth)

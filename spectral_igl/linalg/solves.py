@@ -69,7 +69,7 @@ def _scalar(x, name):
     return x.real if x.imag == 0 else x
 
 
-def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
+def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto", keep: bool = True):
     r"""Cached factorization of :math:`\theta B + \beta L`.
 
     Parameters
@@ -80,6 +80,10 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
         (Cholesky); complex values give a complex symmetric matrix (LDLᵀ when its real or
         imaginary part is definite, else SuperLU).
     backend : {"auto", "cholespy", "pypardiso", "ldlt", "superlu"}
+    keep : bool
+        Store a new factorization in ``lap.cache`` (default). ``False`` returns a cached
+        one if there is one, else a fresh one that is not stored (for a single pass that
+        should hold one factor at a time).
 
     Returns
     -------
@@ -120,8 +124,12 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto"):
         A = (theta * lap.B + beta * lap.L).tocsr()
         return factorize(A, backend=backend, spd=True) if spd else factorize(A, backend="superlu", spd=False)
 
+    key = ("shifted", beta, theta, backend)
     try:
-        return lap.cache.fetch("factor", ("shifted", beta, theta, backend), build)
+        if not keep:
+            hit = lap.cache.get("factor", key)
+            return hit if hit is not None else build()
+        return lap.cache.fetch("factor", key, build)
     except RuntimeError as err:   # the sparse backends' word for a numerically singular matrix
         raise ValueError(f"theta B + beta L cannot be factorized for beta={beta}, theta={theta} (singular "
                          f"or denormal: -theta/beta is an eigenvalue, or one of them dwarfs the other): "
