@@ -92,7 +92,7 @@ def main(argv=None):
     except ImportError:
         compiled = "NumPy reference kernels (no spectral_igl.laplacian._assembly build)"
     print(f"{compiled}; numpy {np.__version__}\n")
-    print(f"| n | constructor | rows | nnz(L) | seconds | ns / nnz | × cotmatrix per nnz |")
+    print("| n | constructor | rows | nnz(L) | seconds | ns / nnz | × cotmatrix per nnz |")
     print("|---|---|---|---|---|---|---|")
     for level in levels:
         for lvl, name, size, nnz, t, ns, ratio in rows_for_level(level, 1 if level >= 8 else a.repeat, a.skip):

@@ -13,7 +13,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 import spectral_igl as sig
 from spectral_igl.io import read_mesh

@@ -283,6 +283,22 @@ def _pf_cases():
     c = np.concatenate([c, [1e-9]])      # near the axis in the middle of the interval
     p = np.concatenate([p, [50.0 + 1e-3j]])
     yield "near_pole", filters.heat(1.0), PartialFractions(a0, c, p, sigma=1.0), 0.0, 100.0
+    # a pair conjugate only to 3.5e-9, 1e-9 from the axis: applied (and so evaluated and
+    # certified) as the exact pair of its first member
+    phi37 = float(np.exp(-1e-3 * 37.0))
+    yield "near_conjugate", filters.heat(1e-3), PartialFractions(
+        phi37, [1e-18, 1e-18], [37.0 + 1e-9j, 37.0 - 1e-9j + 3.5e-9]), 37.0 - 2e-8, 37.0 + 2e-8
+
+
+def test_partial_fractions_evaluate_what_they_apply():
+    """r(s) is the grouped form the solves apply: each pair exactly conjugate."""
+    from spectral_igl.approx.rational import PartialFractions
+
+    pf = PartialFractions(0.5, [1e-3 + 2e-3j, 1e-3 - 2e-3j * (1 + 1e-12)], [2.0 + 1j, 2.0 - 1j * (1 + 1e-12)])
+    assert len(pf.terms) == 1 and pf.terms[0][2] == 2
+    s = np.linspace(0.0, 5.0, 11)
+    c, z, _ = pf.terms[0]
+    assert np.allclose(pf(s), 0.5 + 2.0 * np.real(c / (s - z)), rtol=1e-15, atol=0)
 
 
 @pytest.mark.parametrize("case", list(_pf_cases()), ids=lambda c: c[0])

@@ -151,11 +151,21 @@ class PartialFractions:
                 terms.append((c[i], z[i], 1))
         self.real_symmetric = sym
         self.terms = terms
+        # the grouped form, term by term: what apply() computes, so what is evaluated and
+        # certified (a nearly conjugate pair is an exact pair, a nearly real pole real)
+        gc, gz = [], []
+        for c_, z_, k_ in terms:
+            gc.append(c_)
+            gz.append(z_)
+            if k_ == 2:
+                gc.append(np.conj(c_))
+                gz.append(np.conj(z_))
+        self._gcoef, self._gpoles = np.array(gc, dtype=complex), np.array(gz, dtype=complex)
 
     def __call__(self, s):
         s = np.asarray(s, dtype=float)
         out = np.full(s.shape, self.alpha0, dtype=complex)
-        for c, z in zip(self.coef, self.poles):
+        for c, z in zip(self._gcoef, self._gpoles):
             out = out + c / (self.sigma * s - z)
         return out.real if self.real_symmetric else out
 
@@ -167,22 +177,8 @@ class PartialFractions:
         r""":math:`|\alpha_0| + \sum_j |c_j| / |\sigma s - z_j|`: the scale of the rounding of r(s)."""
         s = np.asarray(s, dtype=float)
         out = np.full(s.shape, abs(self.alpha0))
-        for c, z in zip(self.coef, self.poles):
+        for c, z in zip(self._gcoef, self._gpoles):
             out = out + abs(c) / np.abs(self.sigma * s - z)
-        return out
-
-    def d2_bound(self, lo, hi):
-        r"""Bound of :math:`|r''|` on each ``[lo_i, hi_i]``: :math:`\sum_j 2|c_j|\sigma^2 /
-        \operatorname{dist}(z_j, \sigma[lo, hi])^3`."""
-        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-        sl, sh = np.minimum(self.sigma * lo, self.sigma * hi), np.maximum(self.sigma * lo, self.sigma * hi)
-        out = np.zeros(lo.shape)
-        for c, z in zip(self.coef, self.poles):
-            dr = np.where(z.real < sl, sl - z.real, np.where(z.real > sh, z.real - sh, 0.0))
-            dist = np.hypot(dr, z.imag)
-            with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-                # numpy powers: a huge sigma gives inf (no bound), never an OverflowError
-                out = out + 2.0 * abs(c) * np.float64(self.sigma) ** 2 / dist ** 3
         return out
 
     def _halved(self):
@@ -193,7 +189,7 @@ class PartialFractions:
             z = np.array([t[1] for t in self.terms], dtype=complex)
             k = np.array([t[2] for t in self.terms], dtype=float)
             return c, z, k
-        return self.coef, self.poles, np.ones(self.poles.size)
+        return self._gcoef, self._gpoles, np.ones(self._gpoles.size)
 
     def second(self, s):
         r""":math:`r''(s) = \sum_j 2c_j\sigma^2/(\sigma s - z_j)^3` and the sum of the
@@ -235,7 +231,7 @@ class PartialFractions:
         r""":math:`|\alpha_0| + \sum_j |c_j| / \operatorname{dist}(z_j, \sigma[a, b])`: bounds the B-norm of each term."""
         tot = abs(self.alpha0)
         lo, hi = sorted((self.sigma * a, self.sigma * b))
-        for c, z in zip(self.coef, self.poles):
+        for c, z in zip(self._gcoef, self._gpoles):
             dr = lo - z.real if z.real < lo else (z.real - hi if z.real > hi else 0.0)
             tot += abs(c) / max(np.hypot(dr, z.imag), 1e-300)
         return tot
@@ -266,14 +262,12 @@ class PartialFractions:
 
 def certify(pf: PartialFractions, filt, a: float, b: float, target: float = 0.0) -> float:
     """Upper bound of max |φ - r| on [a, b]: proved (:func:`.common.certified_sup`) for the
-    built-in filters (``filter_d2(filt)`` is not None), else a refined-sample estimate."""
-    d2 = filter_d2(filt)
-    if d2 is not None:
+    built-in filters (those with :func:`.common.filter_second`), else a refined-sample estimate."""
+    phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
+    if phi2 is not None and ell is not None:
         def err2(s):
             v = filt(s)
             return v - pf(s), np.abs(v) + pf.magnitude(s)
-
-        phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
 
         def e2(s):
             v2 = phi2(s)

@@ -606,7 +606,8 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
     u, inv = np.unique(T, return_inverse=True)
     E = np.zeros((lap.n, idx.size))
     E[idx, np.arange(idx.size)] = 1.0
-    out = np.zeros((lap.n, idx.size, u.size))
+    # one (n, m) slab per time, updated in place: the output is the memory, not its copies
+    out = np.zeros((u.size, lap.n, idx.size))
     eps = np.empty(u.size)
     Minv = None
     for g, upper, real, fits, e in _heat_plan(lap, u, tol, targets=float(tol)):
@@ -618,15 +619,22 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
         else:
             if Minv is None:
                 Minv = mass_solve(lap, E)
-            out[:, :, g] += Minv[:, :, None] * al[None, None, :]
+            for q, k in enumerate(g):
+                out[k] += al[q] * Minv
         for j, (z, fac) in enumerate(_factorizations(lap, upper, real)):
             X = fac.solve(E)
             del fac
-            if j < upper.size:
-                out[:, :, g] += 2.0 * (X.real[:, :, None] * C[:, j].real - X.imag[:, :, None] * C[:, j].imag)
-            else:
-                out[:, :, g] += X.real[:, :, None] * C[:, j].real
-    return out[:, :, inv], eps[inv]
+            Xr, Xi = np.ascontiguousarray(X.real), np.ascontiguousarray(X.imag)
+            del X
+            for q, k in enumerate(g):
+                if j < upper.size:         # a conjugate pair: 2 Re(c x)
+                    out[k] += (2.0 * C[q, j].real) * Xr
+                    out[k] -= (2.0 * C[q, j].imag) * Xi
+                else:
+                    out[k] += C[q, j].real * Xr
+    if not np.array_equal(inv, np.arange(inv.size)):
+        out = out[inv]
+    return np.moveaxis(out, 0, -1), eps[inv]
 
 
 def as_filters(filters):

@@ -1,7 +1,6 @@
 """Polygon-mesh Laplacian: virtual vertices, refinement and prolongation (Bunge et al. 2020)."""
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
@@ -179,7 +178,7 @@ def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
         kept.append(F)
         nv += m
     if not tris:
-        raise ValueError(f"all polygons of faces are degenerate (repeated vertices or zero area)")
+        raise ValueError("all polygons of faces are degenerate (repeated vertices or zero area)")
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate polygon(s) (repeated vertex or zero-area fan "
                       "triangle)", RuntimeWarning, stacklevel=2)
