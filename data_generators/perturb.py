@@ -115,6 +115,25 @@ def sample_points(V, F, n: int, density=None, seed: int = 0, project=None) -> np
     return np.asarray(project(P), float) if project is not None else P
 
 
+def midpoint_subdivide(V, F, times: int = 1):
+    """Split each triangle into four at its edge midpoints, ``times`` times.
+
+    The piecewise-linear surface is unchanged (no smoothing), so linear FEM on the result
+    converges to the spectrum of the surface ``(V, F)`` itself. Works on non-manifold and
+    multi-component meshes. Returns ``(V, F)`` with the original vertices first.
+    """
+    V, F = np.asarray(V, float), np.asarray(F, dtype=np.int64)
+    for _ in range(int(times)):
+        E = np.sort(np.r_[F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]], axis=1)
+        u, inv = np.unique(E, axis=0, return_inverse=True)
+        m = len(V) + inv.ravel().reshape(3, -1).T          # midpoint opposite each corner
+        V = np.r_[V, 0.5 * (V[u[:, 0]] + V[u[:, 1]])]
+        a, b, c = F.T
+        ma, mb, mc = m.T
+        F = np.r_[np.c_[a, mc, mb], np.c_[mc, b, ma], np.c_[mb, ma, c], np.c_[ma, mb, mc]]
+    return V, F
+
+
 def volume_from_surface(V, F, edge_length_fac: float = 0.05, **kwargs):
     """Tetrahedral mesh of the volume inside a closed surface (fTetWild). Returns ``(V, T)``."""
     from spectral_igl import tetrahedralize
