@@ -23,7 +23,7 @@ from .._validate import as_int, as_positive, describe
 from ..laplacian import Laplacian
 from ..linalg import factorize
 
-__all__ = ["PositiveHeat", "metzler_stiffness", "MAX_STEPS"]
+__all__ = ["PositiveHeat", "metzler_stiffness", "log_apply", "MAX_STEPS"]
 
 #: most backward-Euler steps of one heat application (each is one sparse solve)
 MAX_STEPS = 10000
@@ -47,6 +47,15 @@ def metzler_stiffness(L) -> sp.csr_matrix:
     n = C.shape[0]
     W = sp.csr_matrix((C.data[keep], (C.row[keep], C.col[keep])), shape=(n, n))
     return (W - sp.diags(np.asarray(W.sum(axis=1)).ravel())).tocsr()
+
+
+def log_apply(apply, logX: np.ndarray) -> np.ndarray:
+    r"""Column-wise :math:`\log K e^{X}` for log-densities X (``-inf`` allowed) and a positive
+    operator ``apply`` = K, the largest value of each column factored out first."""
+    m = np.max(np.where(np.isfinite(logX), logX, -np.inf), axis=0)
+    m = np.where(np.isfinite(m), m, 0.0)
+    Y = apply(np.exp(logX - m))
+    return np.log(np.maximum(Y, np.finfo(float).tiny)) + m
 
 
 class PositiveHeat:
@@ -108,13 +117,9 @@ class PositiveHeat:
         return X
 
     def log_apply(self, logX: np.ndarray) -> np.ndarray:
-        r"""Column-wise :math:`\log K e^{X}` for log-densities (``-inf`` allowed), the
-        largest value of each column factored out; the kernel is positive, so the log of
-        each entry is accurate relative to itself."""
-        m = np.max(np.where(np.isfinite(logX), logX, -np.inf), axis=0)
-        m = np.where(np.isfinite(m), m, 0.0)
-        Y = self.apply(np.exp(logX - m))
-        return np.log(np.maximum(Y, np.finfo(float).tiny)) + m
+        r"""Column-wise :math:`\log K e^{X}` (see :func:`log_apply`); the kernel is positive,
+        so the log of each entry is accurate relative to itself."""
+        return log_apply(self.apply, logX)
 
     def column(self, source: int) -> np.ndarray:
         r"""(n,) kernel column :math:`K_t(\cdot, p) \approx P^N (e_p / m_p)`."""

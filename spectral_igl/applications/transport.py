@@ -9,7 +9,7 @@ import numpy as np
 from .._validate import as_int, as_positive, as_signal, as_tol, describe
 from ..laplacian import as_laplacian
 from .geodesics import HeatGeodesics
-from .heat_steps import PositiveHeat
+from .heat_steps import PositiveHeat, log_apply
 
 __all__ = ["wasserstein_distance", "sinkhorn", "wasserstein_barycenter", "GeodesicKernel", "KERNELS",
            "GEODESIC_MAX"]
@@ -55,10 +55,7 @@ class GeodesicKernel:
         r"""Column-wise :math:`\log K e^{X}`: a dense product with each column's largest
         value factored out, or log-sum-exp where kernel entries would underflow."""
         if self.K is not None:
-            m = np.max(np.where(np.isfinite(logX), logX, -np.inf), axis=0)
-            m = np.where(np.isfinite(m), m, 0.0)
-            Y = self.K @ np.exp(logX - m)
-            return np.log(np.maximum(Y, _TINY)) + m
+            return log_apply(self.K.dot, logX)
         from scipy.special import logsumexp
 
         la = np.log(self.mass)
@@ -72,8 +69,6 @@ def _all_pairs(lap):
     np.fill_diagonal(D, 0.0)
     return D
 
-
-_TINY = np.finfo(float).tiny
 
 
 def _density(lap, mu, name, mass):
