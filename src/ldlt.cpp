@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <complex>
+#include <exception>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -280,6 +281,17 @@ struct Factor {
     std::vector<T> D;   // pivots, internal order
 
     Factor(std::shared_ptr<Symbolic> sym, const T *vals) : S(std::move(sym)) {
+        std::exception_ptr err;
+        numeric(vals, err);
+        if (err) std::rethrow_exception(err);
+    }
+
+    // the numeric factorization of the analysed pattern with values vals
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
+#endif
+    void numeric(const T *vals, std::exception_ptr &err) {
+        try {
         const Symbolic &s = *S;
         Lx.assign(s.nnz_L, T(0));
         D.assign(s.n, T(0));
@@ -350,18 +362,32 @@ struct Factor {
             }
             std::copy(F.begin(), F.begin() + size_t(m) * nc, Lx.begin() + s.lptr[J]);
         }
+            } catch (...) {   // no exception may leave a run-time dispatched clone
+            err = std::current_exception();
+        }
     }
 
     // X <- A^-1 X for X (n x k, row-major) in internal order: all k columns together
     void solve_internal(T *x, const size_t k) const {
-        if (k == 1) solve_block<1>(x, 1);     // the compiler unrolls the one-column case
-        else solve_block<0>(x, k);
+        std::exception_ptr err;
+        if (k == 1) solve_block<1>(x, 1, err);     // the compiler unrolls the one-column case
+        else solve_block<0>(x, k, err);
+        if (err) std::rethrow_exception(err);
     }
 
+    // Supernode by supernode: the dense diagonal block first (its rows are f..f+nc-1), then
+    // the rows below it, each row's update summed over the block's columns in a small
+    // buffer and applied once (the block's nc rows of X stay in cache; the scattered rows
+    // of X are touched once per supernode, not once per column).
     template <size_t K>
-    void solve_block(T *x, size_t k_dyn) const {
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
+#endif
+    void solve_block(T *x, size_t k_dyn, std::exception_ptr &err) const {
+        try {
         const size_t k = K ? K : k_dyn;
         const Symbolic &s = *S;
+        std::vector<T> buf(k);
         for (int J = 0; J < s.ns; ++J) {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
@@ -369,11 +395,21 @@ struct Factor {
             for (int kc = 0; kc < nc; ++kc) {
                 const T *xk = x + size_t(f + kc) * k;
                 const T *Pk = P + size_t(kc) * m;
-                for (int i = kc + 1; i < m; ++i) {
+                for (int i = kc + 1; i < nc; ++i) {
                     const T l = Pk[i];
-                    T *xi = x + size_t(r[i]) * k;
+                    T *xi = x + size_t(f + i) * k;
                     for (size_t c = 0; c < k; ++c) xi[c] -= l * xk[c];
                 }
+            }
+            for (int i = nc; i < m; ++i) {
+                std::fill(buf.begin(), buf.end(), T(0));
+                for (int kc = 0; kc < nc; ++kc) {
+                    const T l = P[size_t(kc) * m + i];
+                    const T *xk = x + size_t(f + kc) * k;
+                    for (size_t c = 0; c < k; ++c) buf[c] += l * xk[c];
+                }
+                T *xi = x + size_t(r[i]) * k;
+                for (size_t c = 0; c < k; ++c) xi[c] -= buf[c];
             }
         }
         for (int i = 0; i < s.n; ++i) {
@@ -384,20 +420,43 @@ struct Factor {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
-            for (int kc = nc - 1; kc >= 0; --kc) {
-                const T *Pk = P + size_t(kc) * m;
-                T *xk = x + size_t(f + kc) * k;
-                for (int i = kc + 1; i < m; ++i) {
-                    const T l = Pk[i];
-                    const T *xi = x + size_t(r[i]) * k;
+            for (int i = nc; i < m; ++i) {          // rows below the block: final already
+                const T *xi = x + size_t(r[i]) * k;
+                for (int kc = 0; kc < nc; ++kc) {
+                    const T l = P[size_t(kc) * m + i];
+                    T *xk = x + size_t(f + kc) * k;
                     for (size_t c = 0; c < k; ++c) xk[c] -= l * xi[c];
                 }
             }
+            for (int kc = nc - 1; kc >= 0; --kc) {
+                const T *Pk = P + size_t(kc) * m;
+                T *xk = x + size_t(f + kc) * k;
+                for (int i = kc + 1; i < nc; ++i) {
+                    const T l = Pk[i];
+                    const T *xi = x + size_t(f + i) * k;
+                    for (size_t c = 0; c < k; ++c) xk[c] -= l * xi[c];
+                }
+            }
+        }
+            } catch (...) {
+            err = std::current_exception();
         }
     }
 
     // diag(A^-1), internal order: selected inversion, root first
     std::vector<T> inverse_diagonal() const {
+        std::vector<T> out;
+        std::exception_ptr err;
+        inverse_diagonal_kernel(out, err);
+        if (err) std::rethrow_exception(err);
+        return out;
+    }
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
+#endif
+    void inverse_diagonal_kernel(std::vector<T> &out, std::exception_ptr &err) const {
+        try {
         const Symbolic &s = *S;
         std::vector<T> diag(s.n);
         std::vector<std::vector<T>> Z(s.ns);  // full m x m blocks of A^-1, alive while needed
@@ -483,7 +542,10 @@ struct Factor {
             pending[J] = s.nchild[J];
             if (pending[J] == 0) std::vector<T>().swap(ZJ);
         }
-        return diag;
+        out = std::move(diag);
+            } catch (...) {
+            err = std::current_exception();
+        }
     }
 };
 
