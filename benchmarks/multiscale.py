@@ -8,6 +8,7 @@ engine tolerance 1e-12).
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --mesh ../shared/data/meshes/armadillo.obj
     OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --torus 40000 --tasks hks,wks
+    OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --box 200000 --tasks columns,onetoall --m 1
 """
 from __future__ import annotations
 
@@ -31,6 +32,13 @@ def shape(args):
     if args.torus:
         nv = int(round(np.sqrt(args.torus / 2.5)))
         V, F = torus(1.0, 0.4, n_major=int(round(args.torus / nv)), n_minor=nv)
+    elif args.box:      # a tetrahedral box of about this many vertices, unit volume
+        from data_generators import box_tets
+
+        k = int(round(args.box ** (1 / 3)))
+        V, T = box_tets((k, k, k))
+        lap0 = sig.laplacian(V, T)
+        return sig.laplacian(V / lap0.area() ** (1 / 3), T)
     else:
         from spectral_igl.io import read_mesh
 
@@ -144,6 +152,7 @@ def run_task(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh")
+    ap.add_argument("--box", type=int, default=0, help="a tetrahedral box of about this many vertices")
     ap.add_argument("--torus", type=int)
     ap.add_argument("--upsample", type=int, default=0)
     ap.add_argument("--tasks", default=",".join(TASKS))
