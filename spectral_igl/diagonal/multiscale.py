@@ -624,8 +624,7 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
         for j, (z, fac) in enumerate(_factorizations(lap, upper, real)):
             X = fac.solve(E)
             del fac
-            Xr, Xi = np.ascontiguousarray(X.real), np.ascontiguousarray(X.imag)
-            del X
+            Xr, Xi = X.real, X.imag
             for q, k in enumerate(g):
                 if j < upper.size:         # a conjugate pair: 2 Re(c x)
                     out[k] += (2.0 * C[q, j].real) * Xr
