@@ -444,7 +444,6 @@ def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_ope
 
 def _knn(tree, P, rows, k):
     """(d, J) of the k nearest other points of ``P[rows]``."""
-    n = P.shape[0]
     d, J = tree.query(P[rows], k + 1, workers=-1)
     if not np.all(np.isfinite(d)):
         raise ValueError("neighbour distances overflow to inf: the point coordinates are too "
