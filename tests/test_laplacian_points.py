@@ -172,19 +172,22 @@ def test_delaunay_neumann_rectangle_spectrum():
     assert np.max(np.abs(ev[1:] - exact[1:]) / exact[1:]) < 0.03, (ev, exact)
 
 
-
-
-@pytest.mark.parametrize("name", ["spot.obj", "fertility.off", "homer.obj", "fandisk.obj"])
-def test_vertices_of_real_shapes_against_their_mesh_spectrum(name):
+def _unit_shape(name):
+    """A shared mesh without its unreferenced vertices, scaled to unit area."""
     import warnings
 
-    robust_laplacian = pytest.importorskip("robust_laplacian")
     V, F = read_shared_mesh(name)
     used = np.unique(F)
     V, F = V[used], np.searchsorted(used, F)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        V = V / np.sqrt(sig.laplacian(V, F).area())
+        return V / np.sqrt(sig.laplacian(V, F).area()), F
+
+
+@pytest.mark.parametrize("name", ["spot.obj", "fertility.off", "homer.obj", "fandisk.obj"])
+def test_vertices_of_real_shapes_against_their_mesh_spectrum(name):
+    robust_laplacian = pytest.importorskip("robust_laplacian")
+    V, F = _unit_shape(name)
     mesh = sig.laplacian(V, F, weights="cotan", mass="full")    # the reference: linear FEM
 
     def first20(L, M):
@@ -272,12 +275,9 @@ def test_coarse_shapes_against_their_surface_spectrum_at_or_below_robust_laplaci
     import warnings
 
     robust_laplacian = pytest.importorskip("robust_laplacian")
-    V, F = read_shared_mesh(name)
-    used = np.unique(F)
-    V, F = V[used], np.searchsorted(used, F)
+    V, F = _unit_shape(name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        V = V / np.sqrt(sig.laplacian(V, F).area())
         # subdivided to at least 25,000 vertices (suzanne 31,118: 0.2% from its limit)
         ref = _surface_spectrum(V, F, int(np.ceil(np.log(25000 / len(V)) / np.log(4))))
     lap = sig.point_cloud_laplacian(V)

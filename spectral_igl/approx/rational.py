@@ -30,7 +30,7 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
-from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2, filter_d2_ellipse, filter_second,
+from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2_ellipse, filter_second,
                      interpolated_d2, inv_bnorm_upper, sup_error)
 
 
@@ -260,11 +260,17 @@ class PartialFractions:
         return out
 
 
+def certifiable(filt) -> bool:
+    """Whether :func:`certify` proves its bound for ``filt`` (a built-in filter whose φ'' and
+    its bound on Bernstein ellipses are known), rather than estimating it."""
+    return filter_second(filt) is not None and filter_d2_ellipse(filt) is not None
+
+
 def certify(pf: PartialFractions, filt, a: float, b: float, target: float = 0.0) -> float:
-    """Upper bound of max |φ - r| on [a, b]: proved (:func:`.common.certified_sup`) for the
-    built-in filters (those with :func:`.common.filter_second`), else a refined-sample estimate."""
-    phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
-    if phi2 is not None and ell is not None:
+    """Upper bound of max |φ - r| on [a, b]: proved (:func:`.common.certified_sup`) when
+    :func:`certifiable`, else a refined-sample estimate."""
+    if certifiable(filt):
+        phi2, ell = filter_second(filt), filter_d2_ellipse(filt)
         def err2(s):
             v = filt(s)
             return v - pf(s), np.abs(v) + pf.magnitude(s)
@@ -363,7 +369,7 @@ class RationalPlan:
 
     def __init__(self, lap, filt, a, b, tol, degree=None, backend="auto"):
         self.lap, self.filt, self.a, self.b, self.backend = lap, filt, a, b, backend
-        self.proved = filter_d2(filt) is not None
+        self.proved = certifiable(filt)
         self.pseudo = 0
         self.pf = None
         if filt.kind == "heat":

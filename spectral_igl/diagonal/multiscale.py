@@ -39,8 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._validate import describe
-from ..approx.common import filter_d2
-from ..approx.rational import PartialFractions, certify, cf_exp, rounding
+from ..approx.rational import PartialFractions, certifiable, certify, cf_exp, rounding
 from ..filters import Filter, heat
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import lambda_min_positive, lambda_min_positive_kind, ldlt, ldlt_factor, mass_solve
@@ -400,7 +399,7 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
     if singular:
         out.values -= np.outer(1.0 / lap.component_volume(),
                                [float(np.real(pf(np.zeros(1))[0])) for pf, _ in fits])
-    proved = (all(filter_d2(f) is not None for f in filters) and lambda_max_kind(lap) == "proof"
+    proved = (all(certifiable(f) for f in filters) and lambda_max_kind(lap) == "proof"
               and (not singular or lambda_min_positive_kind(lap) == "proof"))
     out.bound_kind = "proof" if proved else "estimate"
     return out

@@ -6,8 +6,7 @@ import scipy.sparse as sp
 
 EPS = np.finfo(float).eps
 
-from ..approx.rational import RationalPlan, aaa_fit, certify, rounding
-from ..approx.common import filter_d2
+from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, rounding
 from ..laplacian import lambda_max, lambda_max_kind
 from ..linalg import (
     grounded_factor,
@@ -90,7 +89,7 @@ class SelinvKernel:
             if pf is None:
                 raise NoSelinv("no usable rational fit")
             eps = certify(pf, filt, a, b) + rounding(pf, a, b, b)
-            if filter_d2(filt) is None:
+            if not certifiable(filt):
                 self.bound_kind = "estimate"
         else:
             if filt.kind == "heat":
