@@ -79,6 +79,17 @@ def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.nda
     return np.maximum(out, 0.0)  # a B-norm squared: only -0.0 can occur
 
 
+def _coming_selinv_kernel(lap, G2, diagonal, delta, tol):
+    """The selected-inverse kernel :func:`kernel_diagonal` is about to use for ``G2``, or None."""
+    if diagonal not in ("auto", "selinv") or not selinv_supported(lap, G2, delta) \
+            or heat_projection_applies(lap, G2):
+        return None
+    try:
+        return selinv_kernel(lap, G2, tol)
+    except NoSelinv:
+        return None
+
+
 def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", method: str = "auto",
                       tol: float = 1e-8, diagonal: str = "auto", k: int | None = None,
                       distance: int | None = None, samples: int = 16, rtol: float = 1e-4,
@@ -164,12 +175,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     G2 = filt.square
     e = np.zeros((n, 1))
     e[s] = 1.0
-    if (diagonal in ("auto", "selinv") and selinv_supported(lap, G2, delta)
-            and not heat_projection_applies(lap, G2)):
-        try:      # the column in the diagonal's pass over the poles: one factor held at a time
-            selinv_kernel(lap, G2, tol).prime(e if delta == "mass" else e * lap.mass[:, None])
-        except NoSelinv:
-            pass
+    kern = _coming_selinv_kernel(lap, G2, diagonal, delta, tol)
+    if kern is not None:      # the column in the diagonal's pass over the poles: one factor held at a time
+        kern.prime(e if delta == "mass" else e * lap.mass[:, None])
     diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
                                   engine_method=method, return_info=True, progress=progress)
@@ -435,12 +443,9 @@ class OneToAll:
         diag_opts["method"] = options.get("diagonal", "auto")
         G2 = self.filter.square
         delta = options.get("delta", "mass")
-        if diag_opts["method"] in ("auto", "selinv") and selinv_supported(self.lap, G2, delta) \
-                and not heat_projection_applies(self.lap, G2):
-            try:   # the factorizations stay (within the budget) for the columns to come
-                selinv_kernel(self.lap, G2, options.get("tol", 1e-8)).keep_factors = True
-            except NoSelinv:
-                pass
+        kern = _coming_selinv_kernel(self.lap, G2, diag_opts["method"], delta, options.get("tol", 1e-8))
+        if kern is not None:   # the factorizations stay (within the budget) for the columns to come
+            kern.keep_factors = True
         if diag_opts["method"] != "eigen":
             self.diagonal, self.info = kernel_diagonal(self.lap, self.filter.square, return_info=True,
                                                        **diag_opts)
