@@ -345,6 +345,9 @@ nb::tuple intrinsic_flips(InF2 l_, InI2 F_) {
             if (cot_opposite(L + 3 * f, i) + cot_opposite(L + 3 * f2, j) >= -1e-12) continue;
             int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
             int64_t a = Fo[3 * f + i], b = Fo[3 * f + i1], c = Fo[3 * f + i2], d = Fo[3 * f2 + j];
+            // j1 must be f2's corner at c and j2 its corner at b: true when f2 is oriented
+            // like f, swapped when the two faces disagree (meshes need not be oriented)
+            if (Fo[3 * f2 + j1] != c) std::swap(j1, j2);
             double bc = L[3 * f + i], ca = L[3 * f + i1], ab = L[3 * f + i2];
             double bd = L[3 * f2 + j1], dc = L[3 * f2 + j2];
             // unfold the quad: b at the origin, c on the x axis, a above and d below

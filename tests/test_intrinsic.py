@@ -47,6 +47,24 @@ def test_flips_match_libigl_on_a_real_mesh():
     _check(V, F)
 
 
+def test_flips_do_not_depend_on_the_faces_orientation():
+    """A mesh need not be oriented: reversing random faces changes neither the triangulation's
+    Laplacian nor its Delaunay property (the flips once read a reversed neighbour's edge
+    lengths in the wrong order)."""
+    from spectral_igl.laplacian.intrinsic import intrinsic_cotan_stiffness
+
+    V, F = torus(24, 12, jitter=0.45, seed=3)
+    rng = np.random.default_rng(0)
+    G = F.copy()
+    rev = rng.random(len(F)) < 0.5
+    G[rev] = G[rev][:, ::-1]
+    S, R = intrinsic_cotan_stiffness(V, F), intrinsic_cotan_stiffness(V, G)
+    assert abs(S - R).max() <= 1e-12 * abs(S).max()
+    assert sp.triu(R, 1).data.max(initial=0.0) <= 1e-12 * abs(R).max()
+    # and the same Laplacian as libigl's on the oriented mesh
+    assert abs(S + igl.intrinsic_delaunay_cotmatrix(V, F)[0]).max() <= 1e-12 * abs(S).max()
+
+
 def test_heat_geodesics_on_the_sphere_stay_accurate():
     from data_generators import icosphere
 

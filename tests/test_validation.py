@@ -152,6 +152,54 @@ CASES = ["face_out_of_range", "negative_tet", "nan_anisotropic", "points_inf", "
          "tetwild_bad_index", "graph_bad", "voxel_object", "int32_overflow_faces"]
 
 
+DEGENERATE_FLIPS = textwrap.dedent("""
+    import numpy as np
+    import spectral_igl as sig
+    from scipy.spatial import ConvexHull
+    # closed surfaces on which libigl's intrinsic Delaunay flips never stop: two triangles on
+    # the same three vertices, a tetrahedron of needles, convex hulls squashed onto a line
+    cases = [(np.array([[0.0, 0, 0], [10, 0, 0], [5, 0.1, 0]]), np.array([[0, 1, 2], [0, 2, 1]])),
+             (np.array([[0.0, 0, 0], [10, 0, 0], [5, 1e-9, 0], [5, 0, 1e-9]]),
+              np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]]))]
+    for k, seed in ((8, 2), (50, 1), (200, 3)):
+        P = np.random.default_rng(seed).standard_normal((k, 3))
+        F = ConvexHull(P).simplices
+        P[:, 1:] *= 1e-9
+        cases.append((P, F))
+    for V, F in cases:
+        lap = sig.laplacian(V, F, weights="intrinsic_delaunay")
+        L = lap.L.toarray()
+        assert np.all(np.isfinite(L)) and np.allclose(L, L.T, rtol=0, atol=1e-12 * abs(L).max())
+        assert abs(L.sum(axis=1)).max() <= 1e-12 * abs(L).max()
+        off = L - np.diag(np.diag(L))
+        assert off.max() <= 1e-9 * abs(L).max()          # Delaunay: no negative weight
+        assert np.linalg.eigvalsh(L).min() >= -1e-9 * abs(L).max()
+    print("ok")
+""")
+
+
+def test_intrinsic_delaunay_weights_stop_on_needles_and_two_triangle_spheres(tmp_path):
+    script = tmp_path / "flips.py"
+    script.write_text(DEGENERATE_FLIPS)
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120,
+                          env={"PYTHONPATH": str(root), "OPENBLAS_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+
+
+def test_intrinsic_delaunay_weights_equal_libigls_on_a_real_mesh():
+    import igl
+
+    from spectral_igl.laplacian.intrinsic import intrinsic_cotan_stiffness
+
+    V, F = icosphere(3)
+    V = V * np.random.default_rng(3).uniform(0.6, 1.4, (len(V), 1))   # bumpy: many flips
+    S = intrinsic_cotan_stiffness(V, F)
+    R = -igl.intrinsic_delaunay_cotmatrix(V, F)[0]
+    assert abs(S - R).max() <= 1e-12 * abs(R).max()
+    assert abs(S - sig.laplacian(V, F).L).max() <= 1e-13 * abs(S).max()     # the default weights
+
+
 @pytest.mark.parametrize("case", CASES)
 def test_subprocess_ends_in_a_python_exception(case, tmp_path):
     script = tmp_path / "bad.py"

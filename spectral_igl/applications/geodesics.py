@@ -8,7 +8,8 @@ from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive,
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, laplacian
-from ..laplacian.intrinsic import element_sum, intrinsic_delaunay, normalized_gradient_divergence
+from ..laplacian.intrinsic import edge_lengths, element_sum, intrinsic_delaunay, normalized_gradient_divergence
+from ..laplacian.intrinsic import mollify as mollify_lengths
 from ..laplacian.mesh import element_measures
 from ..linalg import factorize, ldlt
 from ..progress import progress_bar
@@ -104,16 +105,8 @@ def intrinsic_operators(V: np.ndarray, F: np.ndarray, mollify: float = 1e-6):
 def _intrinsic_parts(V, F, mollify):
     """(gx, gy, A, Fi, L, M, h): intrinsic_operators' results with the per-face hat gradients
     (gx, gy) (m, 3) and the flipped faces Fi in place of the assembled gradient."""
-    import igl
-
     n = V.shape[0]
-    l = igl.edge_lengths(V, F)
-    if mollify > 0:
-        eps = mollify * float(l.mean())
-        margin = np.stack([l[:, 1] + l[:, 2] - l[:, 0], l[:, 2] + l[:, 0] - l[:, 1],
-                           l[:, 0] + l[:, 1] - l[:, 2]], axis=1)
-        delta = max(0.0, float(np.max(eps - margin)))
-        l = l + delta
+    l, _ = mollify_lengths(edge_lengths(V, F), mollify)
     l, Fi = intrinsic_delaunay(l, F)
     gx, gy, A = _frame_gradients(l)
     h = float(l.mean())

@@ -153,9 +153,9 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
     if weights == "intrinsic_delaunay":
         if C.shape[1] != 3:
             raise ValueError("weights='intrinsic_delaunay' is defined for triangle meshes only")
-        if V.shape[1] != 3:
-            V = np.ascontiguousarray(np.c_[V, np.zeros(len(V))])
-        return -igl.intrinsic_delaunay_cotmatrix(V, C)[0].tocsr()
+        from .intrinsic import intrinsic_cotan_stiffness
+
+        return intrinsic_cotan_stiffness(V, C)
     if weights == "mean_value":
         if C.shape[1] != 3:
             raise ValueError("weights='mean_value' is defined for triangle meshes only")
@@ -181,13 +181,31 @@ def full_mass(V: np.ndarray, C: np.ndarray, meas: np.ndarray | None = None) -> s
     return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
-def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
-    import igl
+def voronoi_areas(V: np.ndarray, F: np.ndarray, meas: np.ndarray | None = None) -> np.ndarray:
+    """(n,) mixed Voronoi areas of a triangle mesh's vertices (Meyer et al. 2003).
 
+    In a triangle without an obtuse angle, corner i gets (|e_ij|² cot θ_k + |e_ik|² cot θ_j) / 8;
+    in an obtuse one, the obtuse corner gets half the area and the others a quarter. The
+    cotangents divide by the area from the cross product (``meas``), which stays accurate
+    on needles whose edge lengths no longer resolve the area.
+    """
+    from .intrinsic import edge_lengths
+
+    A = element_measures(V, F) if meas is None else np.asarray(meas, dtype=float)
+    sq = edge_lengths(V, F) ** 2                                   # opposite each corner
+    cot = (np.roll(sq, -1, axis=1) + np.roll(sq, -2, axis=1) - sq) / (4.0 * A[:, None])
+    area = (np.roll(sq, -1, axis=1) * np.roll(cot, -1, axis=1) + np.roll(sq, -2, axis=1) * np.roll(cot, -2, axis=1)) / 8.0
+    obtuse = cot < 0
+    some = obtuse.any(axis=1)
+    area[some] = np.where(obtuse[some], 0.5, 0.25) * A[some, None]
+    return np.bincount(F.ravel(), weights=area.ravel(), minlength=V.shape[0])
+
+
+def mass_matrix(V: np.ndarray, C: np.ndarray, mass: str, meas: np.ndarray | None = None) -> sp.csr_matrix:
     if mass == "full":
         return full_mass(V, C, meas)
     if mass in ("lumped", "voronoi") and C.shape[1] == 3:
-        return igl.massmatrix(V, C, igl.MASSMATRIX_TYPE_VORONOI).tocsr()
+        return sp.diags(voronoi_areas(V, C, meas)).tocsr()
     # barycentric: row sums of the consistent mass (the lumped mass of tets as well)
     return sp.diags(np.asarray(full_mass(V, C, meas).sum(axis=1)).ravel()).tocsr()
 
