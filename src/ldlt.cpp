@@ -21,6 +21,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "minimum_degree.hpp"
@@ -30,6 +31,58 @@ using cplx = std::complex<double>;
 using i64 = int64_t;
 
 namespace {
+
+// ------------------------------------------------------------------------- BLAS
+// Level-3 BLAS for the large dense blocks (the fronts near the root), called through the
+// function pointers scipy.linalg.cython_blas exports; Python sets them once at import, so
+// nothing is linked against a BLAS here. Blocks with fewer than blas::min_work
+// multiply-adds keep the loops below (a call costs more than a small block).
+namespace blas {
+template <class T> using gemm_t = void (*)(char *, char *, int *, int *, int *, T *, T *, int *, T *, int *, T *, T *, int *);
+template <class T> using trxm_t = void (*)(char *, char *, char *, char *, int *, int *, T *, T *, int *, T *, int *);
+gemm_t<double> dgemm = nullptr;
+gemm_t<cplx> zgemm = nullptr;
+trxm_t<double> dtrsm = nullptr, dtrmm = nullptr;
+trxm_t<cplx> ztrsm = nullptr, ztrmm = nullptr;
+double min_work = 32768.0;
+
+bool ready() { return dgemm && zgemm && dtrsm && dtrmm && ztrsm && ztrmm; }
+inline bool use(double work) { return work >= min_work && ready(); }
+
+inline gemm_t<double> gemm_of(double *) { return dgemm; }
+inline gemm_t<cplx> gemm_of(cplx *) { return zgemm; }
+
+// C (m x n, ldc) = alpha op(A) op(B) + beta C, column-major; op is 'N' or 'T' (never conjugated)
+template <class T>
+void gemm(char ta, char tb, int m, int n, int k, T alpha, const T *A, int lda, const T *B, int ldb, T beta, T *C, int ldc) {
+    if (m <= 0 || n <= 0) return;
+    if (k <= 0) {   // C = beta C
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < m; ++i) C[size_t(j) * ldc + i] = beta == T(0) ? T(0) : beta * C[size_t(j) * ldc + i];
+        return;
+    }
+    gemm_of(static_cast<T *>(nullptr))(&ta, &tb, &m, &n, &k, &alpha, const_cast<T *>(A), &lda,
+                                         const_cast<T *>(B), &ldb, &beta, C, &ldc);
+}
+
+// B (m x n, ldb) = alpha op(A)^-1 B (side 'L') or alpha B op(A)^-1 (side 'R'), A triangular
+template <class T>
+void trsm(char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
+    if (m <= 0 || n <= 0) return;
+    trxm_t<T> f;
+    if constexpr (std::is_same_v<T, double>) f = dtrsm; else f = ztrsm;
+    f(&side, &uplo, &ta, &diag, &m, &n, &alpha, const_cast<T *>(A), &lda, B, &ldb);
+}
+
+// B = alpha op(A) B (side 'L'), A triangular
+template <class T>
+void trmm(char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
+    if (m <= 0 || n <= 0) return;
+    trxm_t<T> f;
+    if constexpr (std::is_same_v<T, double>) f = dtrmm; else f = ztrmm;
+    f(&side, &uplo, &ta, &diag, &m, &n, &alpha, const_cast<T *>(A), &lda, B, &ldb);
+}
+}  // namespace blas
 
 // ------------------------------------------------------------------------- symbolic
 struct Symbolic {
@@ -317,8 +370,20 @@ struct Factor {
                     for (int a = b; a < mc; ++a) Fc[r[a]] += Uc[a];
                 }
             }
-            // dense LDL^T of the first nc columns
             T *Dj = &D[s.first[J]];
+            if (blas::use(double(nc) * nc * m + double(mr) * mr * nc)) {
+                front_blas(F.data(), m, nc, Dj, s.first[J], W);
+                if (mr > 0) {
+                    std::vector<T> U(size_t(mr) * mr);
+                    for (int j = 0; j < mr; ++j)
+                        std::copy(&F[size_t(nc + j) * m + nc + j], &F[size_t(nc + j) * m + m], &U[size_t(j) * mr + j]);
+                    stack.push_back(std::move(U));
+                    stack_id.push_back(J);
+                }
+                std::copy(F.begin(), F.begin() + size_t(m) * nc, Lx.begin() + s.lptr[J]);
+                continue;
+            }
+            // dense LDL^T of the first nc columns
             for (int k = 0; k < nc; ++k) {
                 T d = F[size_t(k) * m + k];
                 if (d == T(0))
@@ -367,12 +432,81 @@ struct Factor {
         }
     }
 
-    // X <- A^-1 X for X (n x k, row-major) in internal order: all k columns together
-    void solve_internal(T *x, const size_t k) const {
+    // The front F (m x m, column-major, lower part) of a large supernode with BLAS: LDL^T of
+    // its first nc columns by blocks of NB (each block's columns by the loops, the rest of
+    // the panel by one gemm), then the trailing update F22 -= L21 D L21^T by column blocks
+    // of the lower triangle. Leaves L in F[:, :nc] (its strictly upper part zeroed), D in
+    // Dj and the update in F22's lower triangle.
+    static void front_blas(T *F, const int m, const int nc, T *Dj, const int col0, std::vector<T> &W) {
+        constexpr int NB = 64, CB = 128;
+        const int mr = m - nc;
+        for (int kb = 0; kb < nc; kb += NB) {
+            const int be = std::min(nc, kb + NB);
+            for (int k = kb; k < be; ++k) {
+                const T d = F[size_t(k) * m + k];
+                if (d == T(0))
+                    throw std::runtime_error("zero pivot in LDL^T at column " + std::to_string(col0 + k));
+                Dj[k] = d;
+                T *Fk = &F[size_t(k) * m];
+                const T dinv = T(1) / d;
+                for (int j = k + 1; j < be; ++j) {
+                    const T sc = Fk[j] * dinv;
+                    T *Fj = &F[size_t(j) * m];
+                    for (int i = j; i < m; ++i) Fj[i] -= Fk[i] * sc;
+                }
+                for (int i = k + 1; i < m; ++i) Fk[i] *= dinv;
+            }
+            if (be < nc) {   // F[be:m, be:nc] -= L[be:m, kb:be] (L[be:nc, kb:be] D)^T
+                const int w = be - kb, cols = nc - be;
+                W.resize(size_t(cols) * w);
+                for (int c = 0; c < w; ++c)
+                    for (int j = 0; j < cols; ++j) W[size_t(c) * cols + j] = F[size_t(kb + c) * m + be + j] * Dj[kb + c];
+                blas::gemm<T>('N', 'T', m - be, cols, w, T(-1), &F[size_t(kb) * m + be], m, W.data(), cols, T(1),
+                              &F[size_t(be) * m + be], m);
+            }
+        }
+        for (int j = 1; j < nc; ++j) std::fill(&F[size_t(j) * m], &F[size_t(j) * m + j], T(0));
+        if (mr == 0) return;
+        W.resize(size_t(mr) * nc);                 // W = L21 D (mr x nc)
+        for (int k = 0; k < nc; ++k)
+            for (int j = 0; j < mr; ++j) W[size_t(k) * mr + j] = F[size_t(k) * m + nc + j] * Dj[k];
+        for (int j0 = 0; j0 < mr; j0 += CB) {       // columns j0.. of F22, rows j0..mr
+            const int jw = std::min(CB, mr - j0);
+            blas::gemm<T>('N', 'T', mr - j0, jw, nc, T(-1), &F[nc + j0], m, &W[j0], mr, T(1),
+                          &F[size_t(nc + j0) * m + nc + j0], m);
+        }
+    }
+
+    // X <- A^-1 X for X (n x k, row-major) in internal order: all k columns together.
+    // With lo/hi (per supernode), the forward substitution at supernode J touches only the
+    // columns [lo[J], hi[J]): the others are known to be zero there (see inverse_columns).
+    void solve_internal(T *x, const size_t k, const int *lo = nullptr, const int *hi = nullptr) const {
         std::exception_ptr err;
-        if (k == 1) solve_block<1>(x, 1, err);     // the compiler unrolls the one-column case
-        else solve_block<0>(x, k, err);
+        if (k == 1) solve_block<1>(x, 1, lo, hi, err);     // the compiler unrolls the one-column case
+        else solve_block<0>(x, k, lo, hi, err);
         if (err) std::rethrow_exception(err);
+    }
+
+    // Columns idx of A^-1 (original labels), as X (n x k, row-major, internal order).
+    // Column c's right-hand side is the unit vector at internal row q_c, so its forward
+    // substitution is nonzero only on the supernodes whose subtree holds q_c. Subtrees are
+    // contiguous column ranges in postorder, so with the columns sorted by q the columns
+    // alive at supernode J are one contiguous range.
+    std::vector<T> inverse_columns_internal(const std::vector<int> &q_sorted) const {
+        const Symbolic &s = *S;
+        const size_t k = q_sorted.size();
+        std::vector<T> x(size_t(s.n) * k, T(0));
+        for (size_t c = 0; c < k; ++c) x[size_t(q_sorted[c]) * k + c] = T(1);
+        std::vector<int> low(s.first.begin(), s.first.end() - 1);   // first column of J's subtree
+        for (int J = 0; J < s.ns; ++J)
+            if (s.sparent[J] != -1) low[s.sparent[J]] = std::min(low[s.sparent[J]], low[J]);
+        std::vector<int> lo(s.ns), hi(s.ns);
+        for (int J = 0; J < s.ns; ++J) {
+            lo[J] = int(std::lower_bound(q_sorted.begin(), q_sorted.end(), low[J]) - q_sorted.begin());
+            hi[J] = int(std::lower_bound(q_sorted.begin(), q_sorted.end(), s.first[J + 1]) - q_sorted.begin());
+        }
+        solve_internal(x.data(), k, lo.data(), hi.data());
+        return x;
     }
 
     // Supernode by supernode: the dense diagonal block first (its rows are f..f+nc-1), then
@@ -383,33 +517,49 @@ struct Factor {
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
     __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
 #endif
-    void solve_block(T *x, size_t k_dyn, std::exception_ptr &err) const {
+    void solve_block(T *x, size_t k_dyn, const int *lo, const int *hi, std::exception_ptr &err) const {
         try {
         const size_t k = K ? K : k_dyn;
         const Symbolic &s = *S;
-        std::vector<T> buf(k);
+        std::vector<T> buf(k), G;
         for (int J = 0; J < s.ns; ++J) {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
+            const size_t c0 = lo ? size_t(lo[J]) : 0, c1 = hi ? size_t(hi[J]) : k;
+            if (c0 >= c1) continue;
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
+            const int kk = int(c1 - c0), mr = m - nc;
+            if (blas::use(double(m) * nc * kk)) {
+                // X_J^T <- X_J^T L11^-T, then G = (L21 X_J)^T scattered into the rows below
+                T *XJ = x + size_t(f) * k + c0;
+                blas::trsm<T>('R', 'L', 'T', 'U', kk, nc, T(1), P, m, XJ, int(k));
+                G.resize(size_t(kk) * mr);
+                blas::gemm<T>('N', 'T', kk, mr, nc, T(1), XJ, int(k), P + nc, m, T(0), G.data(), kk);
+                for (int i = 0; i < mr; ++i) {
+                    T *xi = x + size_t(r[nc + i]) * k + c0;
+                    const T *gi = &G[size_t(i) * kk];
+                    for (int c = 0; c < kk; ++c) xi[c] -= gi[c];
+                }
+                continue;
+            }
             for (int kc = 0; kc < nc; ++kc) {
                 const T *xk = x + size_t(f + kc) * k;
                 const T *Pk = P + size_t(kc) * m;
                 for (int i = kc + 1; i < nc; ++i) {
                     const T l = Pk[i];
                     T *xi = x + size_t(f + i) * k;
-                    for (size_t c = 0; c < k; ++c) xi[c] -= l * xk[c];
+                    for (size_t c = c0; c < c1; ++c) xi[c] -= l * xk[c];
                 }
             }
             for (int i = nc; i < m; ++i) {
-                std::fill(buf.begin(), buf.end(), T(0));
+                std::fill(buf.begin() + c0, buf.begin() + c1, T(0));
                 for (int kc = 0; kc < nc; ++kc) {
                     const T l = P[size_t(kc) * m + i];
                     const T *xk = x + size_t(f + kc) * k;
-                    for (size_t c = 0; c < k; ++c) buf[c] += l * xk[c];
+                    for (size_t c = c0; c < c1; ++c) buf[c] += l * xk[c];
                 }
                 T *xi = x + size_t(r[i]) * k;
-                for (size_t c = 0; c < k; ++c) xi[c] -= buf[c];
+                for (size_t c = c0; c < c1; ++c) xi[c] -= buf[c];
             }
         }
         for (int i = 0; i < s.n; ++i) {
@@ -420,6 +570,16 @@ struct Factor {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
+            if (blas::use(double(m) * nc * k)) {
+                // X_J^T -= X_R^T L21 (the rows below, gathered), then X_J^T <- X_J^T L11^-1
+                const int mr = m - nc;
+                T *XJ = x + size_t(f) * k;
+                G.resize(size_t(k) * mr);
+                for (int i = 0; i < mr; ++i) std::copy(x + size_t(r[nc + i]) * k, x + size_t(r[nc + i]) * k + k, &G[size_t(i) * k]);
+                blas::gemm<T>('N', 'N', int(k), nc, mr, T(-1), G.data(), int(k), P + nc, m, T(1), XJ, int(k));
+                blas::trsm<T>('R', 'L', 'N', 'U', int(k), nc, T(1), P, m, XJ, int(k));
+                continue;
+            }
             for (int i = nc; i < m; ++i) {          // rows below the block: final already
                 const T *xi = x + size_t(r[i]) * k;
                 for (int kc = 0; kc < nc; ++kc) {
@@ -479,6 +639,24 @@ struct Factor {
                 }
                 if (--pending[Par] == 0) std::vector<T>().swap(Z[Par]);
             }
+            if (blas::use(double(mr) * mr * nc + double(nc) * nc * (nc + mr))) {
+                // Y = L21 L11^-1; Z21 = -Zhat Y; Z11 = L11^-T D^-1 L11^-1 - Z21^T Y
+                Y.resize(size_t(mr) * nc);
+                for (int k = 0; k < nc; ++k) std::copy(P + size_t(k) * m + nc, P + size_t(k) * m + m, &Y[size_t(k) * mr]);
+                blas::trsm<T>('R', 'L', 'N', 'U', mr, nc, T(1), P, m, Y.data(), mr);
+                blas::gemm<T>('N', 'N', mr, nc, mr, T(-1), &ZJ[size_t(nc) * m + nc], m, Y.data(), mr, T(0), &ZJ[nc], m);
+                Linv.assign(size_t(nc) * nc, T(0));
+                for (int k = 0; k < nc; ++k) Linv[size_t(k) * nc + k] = T(1);
+                blas::trsm<T>('L', 'L', 'N', 'U', nc, nc, T(1), P, m, Linv.data(), nc);
+                LinvD.resize(size_t(nc) * nc);
+                for (int b = 0; b < nc; ++b)
+                    for (int i = 0; i < nc; ++i) LinvD[size_t(b) * nc + i] = Linv[size_t(b) * nc + i] / D[f + i];
+                blas::trmm<T>('L', 'L', 'T', 'U', nc, nc, T(1), Linv.data(), nc, LinvD.data(), nc);
+                for (int b = 0; b < nc; ++b) std::copy(&LinvD[size_t(b) * nc], &LinvD[size_t(b) * nc + nc], &ZJ[size_t(b) * m]);
+                blas::gemm<T>('T', 'N', nc, nc, mr, T(-1), &ZJ[nc], m, Y.data(), mr, T(1), ZJ.data(), m);
+                for (int b = 0; b < nc; ++b)            // symmetric: the lower triangle mirrored
+                    for (int a = b + 1; a < nc; ++a) ZJ[size_t(a) * m + b] = ZJ[size_t(b) * m + a];
+            } else {
             // Y = L21 L11^-1 (mr x nc)
             Y.assign(size_t(mr) * nc, T(0));
             for (int k = 0; k < nc; ++k)
@@ -535,6 +713,7 @@ struct Factor {
                     ZJ[size_t(b) * m + a] = acc;
                     ZJ[size_t(a) * m + b] = acc;
                 }
+            }
             // the upper-right block Z12 = Z21^T
             for (int k = 0; k < nc; ++k)
                 for (int i = 0; i < mr; ++i) ZJ[size_t(nc + i) * m + k] = ZJ[size_t(k) * m + nc + i];
@@ -593,6 +772,34 @@ void bind_factor(nb::module_ &mod, const char *name) {
                  return to_numpy<T>(std::move(out), {n, k});
              },
              nb::arg("b"), "A^-1 b for b of shape (n, k), original ordering.")
+        .def("inverse_columns",
+             [](const FT &F, nb::ndarray<const int64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu> idx) {
+                 const Symbolic &s = *F.S;
+                 const size_t n = s.n, k = idx.shape(0);
+                 const int64_t *ix = idx.data();
+                 for (size_t c = 0; c < k; ++c)
+                     if (ix[c] < 0 || ix[c] >= int64_t(n)) throw std::invalid_argument("column index out of range");
+                 std::vector<T> out(n * k);
+                 {
+                     nb::gil_scoped_release rel;
+                     std::vector<int> inv(n);
+                     for (size_t q = 0; q < n; ++q) inv[s.perm[q]] = int(q);
+                     std::vector<size_t> order(k);
+                     for (size_t c = 0; c < k; ++c) order[c] = c;
+                     std::stable_sort(order.begin(), order.end(),
+                                      [&](size_t a, size_t b) { return inv[ix[a]] < inv[ix[b]]; });
+                     std::vector<int> qs(k);
+                     for (size_t j = 0; j < k; ++j) qs[j] = inv[ix[order[j]]];
+                     std::vector<T> x = F.inverse_columns_internal(qs);
+                     for (size_t q = 0; q < n; ++q) {
+                         const T *xq = &x[q * k];
+                         T *oq = &out[size_t(s.perm[q]) * k];
+                         for (size_t j = 0; j < k; ++j) oq[order[j]] = xq[j];
+                     }
+                 }
+                 return to_numpy<T>(std::move(out), {n, k});
+             },
+             nb::arg("idx"), "Columns idx of A^-1, shape (n, k), original ordering.")
         .def("inverse_diagonal",
              [](const FT &F) {
                  const Symbolic &s = *F.S;
@@ -657,6 +864,20 @@ NB_MODULE(_ldlt, mod) {
             nb::arg("indptr"), nb::arg("indices"),
             "Minimum-degree ordering (perm[q] = original index) of the pattern of A + A^T "
             "(CSC; diagonal and duplicates ignored).");
+    mod.def("set_blas",
+            [](uintptr_t dgemm, uintptr_t zgemm, uintptr_t dtrsm, uintptr_t ztrsm, uintptr_t dtrmm, uintptr_t ztrmm) {
+                blas::dgemm = reinterpret_cast<blas::gemm_t<double>>(dgemm);
+                blas::zgemm = reinterpret_cast<blas::gemm_t<cplx>>(zgemm);
+                blas::dtrsm = reinterpret_cast<blas::trxm_t<double>>(dtrsm);
+                blas::ztrsm = reinterpret_cast<blas::trxm_t<cplx>>(ztrsm);
+                blas::dtrmm = reinterpret_cast<blas::trxm_t<double>>(dtrmm);
+                blas::ztrmm = reinterpret_cast<blas::trxm_t<cplx>>(ztrmm);
+            },
+            nb::arg("dgemm"), nb::arg("zgemm"), nb::arg("dtrsm"), nb::arg("ztrsm"), nb::arg("dtrmm"), nb::arg("ztrmm"),
+            "Addresses of the Fortran-convention BLAS routines (scipy.linalg.cython_blas).");
+    mod.def("set_blas_min_work", [](double w) { double old = blas::min_work; blas::min_work = w; return old; },
+            nb::arg("work"), "Multiply-adds from which a dense block goes to BLAS (returns the previous value).");
+    mod.def("blas_ready", &blas::ready);
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

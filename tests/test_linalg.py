@@ -74,7 +74,7 @@ def test_minimum_degree_ordering_factor_matches_dense(rng):
     perm = ldlt.minimum_degree(A)
     assert np.array_equal(np.sort(perm), np.arange(lap.n))
     md = ldlt.Pattern(A, ordering="minimum_degree")
-    nd = ldlt.Pattern(A)
+    nd = ldlt.Pattern(A, ordering="nested_dissection")
     assert md.ordering == "minimum_degree" and nd.ordering == "nested_dissection"
     # a fill-reducing ordering: far below the dense triangle, within 1.5x of METIS's
     assert md.nnz_L < 0.05 * lap.n * (lap.n + 1) / 2
@@ -88,6 +88,81 @@ def test_minimum_degree_ordering_factor_matches_dense(rng):
     assert np.array_equal(md.values(S), md.values(sp.coo_matrix(S)))
     with pytest.raises(ValueError, match="ordering"):
         ldlt.Pattern(A, ordering="rcm")
+
+
+def test_auto_ordering_keeps_minimum_degree_on_a_small_surface_and_nested_dissection_on_a_volume():
+    from data_generators import box_tets
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("compiled LDLT not built")
+    for lap, want in ((sig.laplacian(*icosphere(4)), "minimum_degree"), (sig.laplacian(*box_tets((14, 14, 14))), "nested_dissection")):
+        A = (lap.B + lap.L).tocsc()
+        auto = ldlt.Pattern(A)
+        md = ldlt.Pattern(A, ordering="minimum_degree")
+        nd = ldlt.Pattern(A, ordering="nested_dissection")
+        assert auto.ordering == want
+        chosen = md if want == "minimum_degree" else nd
+        assert auto.symbolic.flops == chosen.symbolic.flops and auto.nnz_L == chosen.nnz_L
+        if want == "minimum_degree":        # narrow updates: nested dissection not needed
+            assert md.symbolic.flops <= ldlt.AUTO_WIDTH * md.nnz_L
+        else:                               # a volume: minimum degree's fronts are wide and costlier
+            assert md.symbolic.flops > ldlt.AUTO_WIDTH * md.nnz_L and nd.symbolic.flops < md.symbolic.flops
+
+
+@pytest.mark.parametrize("dtype", [float, complex])
+def test_unit_right_hand_sides_take_the_sparse_forward_substitution_and_match_the_dense_solve(rng, dtype):
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("compiled LDLT not built")
+    lap = sig.laplacian(*icosphere(3))
+    A = (lap.L.astype(dtype) - (0.7 + (2.0j if dtype is complex else 0.0)) * lap.B.astype(dtype) + 5 * lap.B).tocsc()
+    f = ldlt.LDLT(A)
+    dense = np.linalg.inv(A.toarray())
+    idx = np.r_[rng.choice(lap.n, 12, replace=False), 7, 7, 0, lap.n - 1]   # repeats and both ends
+    X = f.inverse_columns(idx)
+    assert X.shape == (lap.n, idx.size) and X.dtype == np.dtype(dtype)
+    assert np.allclose(X, dense[:, idx], rtol=1e-11, atol=1e-13 * np.abs(dense).max())
+    # solve() finds one nonzero per column itself, scaled columns included; a column with
+    # two nonzeros takes the dense path
+    E = np.zeros((lap.n, idx.size))
+    E[idx, np.arange(idx.size)] = np.linspace(-2.0, 3.0, idx.size)
+    assert np.allclose(f.solve(E), dense @ E, rtol=1e-11, atol=1e-13 * np.abs(dense).max())
+    assert np.allclose(f.solve(E[:, 3]), dense @ E[:, 3], rtol=1e-11, atol=1e-13 * np.abs(dense).max())
+    E[0, 0] += 1.0
+    assert np.allclose(f.solve(E), dense @ E, rtol=1e-11, atol=1e-13 * np.abs(dense).max())
+    with pytest.raises(ValueError, match="column indices"):
+        f.inverse_columns([0, lap.n])
+
+
+@pytest.mark.parametrize("min_work", [0.0, 1e30])
+@pytest.mark.parametrize("dtype", [float, complex])
+def test_blas_and_loop_kernels_agree_with_the_dense_inverse(rng, dtype, min_work):
+    """Every dense block through BLAS (min_work 0) or through the loops (1e30): the factor's
+    solves, unit columns and selected inverse against the dense inverse, on a tetrahedral box
+    (fronts of a few hundred) and a sphere (small fronts)."""
+    from data_generators import box_tets
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("compiled LDLT not built")
+    ext = ldlt._ext()
+    old = ext.set_blas_min_work(min_work)
+    try:
+        for lap in (sig.laplacian(*box_tets((9, 9, 9))), sig.laplacian(*icosphere(3))):
+            z = (0.7 + 2.0j) if dtype is complex else -0.7
+            A = (lap.L.astype(dtype) - z * lap.B.astype(dtype)).tocsc()
+            f = ldlt.LDLT(A)
+            dense = np.linalg.inv(A.toarray())
+            scale = np.abs(dense).max()
+            assert np.allclose(f.inverse_diagonal(), np.diag(dense), rtol=1e-10, atol=1e-12 * scale)
+            b = rng.standard_normal((lap.n, 3))
+            assert np.allclose(f.solve(b), dense @ b, rtol=1e-10, atol=1e-12 * scale * np.abs(b).sum(0).max())
+            idx = rng.choice(lap.n, 9, replace=False)
+            assert np.allclose(f.inverse_columns(idx), dense[:, idx], rtol=1e-10, atol=1e-12 * scale)
+    finally:
+        ext.set_blas_min_work(old)
 
 
 def _exact_fill(A, perm):

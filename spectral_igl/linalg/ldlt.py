@@ -7,9 +7,10 @@ leading minors never vanish. It gives ``solve(b)`` and ``inverse_diagonal()``, t
 diagonal of ``A⁻¹`` by selected inversion (Takahashi's equations on the supernodes of the
 factor), at about the cost of a second factorization instead of n solves.
 
-The fill-reducing ordering is METIS nested dissection (pymetis) or approximate minimum
-degree (compiled; about ten times cheaper to compute, with a factor of about the same size
-on surface meshes of up to 10⁵ vertices); ``Pattern`` holds it and the symbolic analysis,
+The fill-reducing ordering is approximate minimum degree (compiled; four to ten times
+cheaper to compute, with a factor of about the same size on surface meshes of up to 10⁵
+vertices) or METIS nested dissection (pymetis), whichever ``Pattern`` finds cheaper to
+factorize (see ``Pattern``); it holds the ordering and the symbolic analysis,
 shared by every matrix with the same sparsity pattern (the shifted matrices of one
 Laplacian).
 """
@@ -20,7 +21,15 @@ import scipy.sparse as sp
 
 __all__ = ["Pattern", "LDLT", "available", "nested_dissection", "minimum_degree", "ORDERINGS"]
 
-ORDERINGS = ("nested_dissection", "minimum_degree")
+ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
+
+#: ``ordering="auto"`` keeps minimum degree while its factorization's flops per stored entry
+#: (the mean width of the updates, small on small surface meshes) stay below this, and
+#: otherwise also tries nested dissection and keeps the one with fewer flops
+AUTO_WIDTH = 100.0
+
+
+_BLAS = ("dgemm", "zgemm", "dtrsm", "ztrsm", "dtrmm", "ztrmm")
 
 
 def _ext():
@@ -28,7 +37,26 @@ def _ext():
         _ldlt as ext,  # the compiled half of this module, built with the package
     )
 
+    if not ext.blas_ready():
+        ext.set_blas(*_blas_addresses())
     return ext
+
+
+def _blas_addresses():
+    """Addresses of the BLAS routines scipy exports to compiled code (its cython_blas
+    capsules), for the dense blocks of the factorization, the solves and the inversion."""
+    import ctypes
+
+    from scipy.linalg import cython_blas
+
+    get_name, get_pointer = ctypes.pythonapi.PyCapsule_GetName, ctypes.pythonapi.PyCapsule_GetPointer
+    get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+    get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
+    out = []
+    for name in _BLAS:
+        cap = cython_blas.__pyx_capi__[name]
+        out.append(int(get_pointer(cap, get_name(cap))))
+    return out
 
 
 def available() -> bool:
@@ -92,13 +120,15 @@ def minimum_degree(A) -> np.ndarray:
 class Pattern:
     """Ordering and symbolic factorization of one symmetric sparsity pattern.
 
-    ``ordering`` is ``"nested_dissection"`` (METIS, the default) or ``"minimum_degree"``
-    (compiled, see :func:`minimum_degree`: about ten times cheaper to compute, a factor of
-    about the same size on surface meshes, so the better choice when a pattern is
-    factorized only a few times).
+    ``ordering`` is ``"nested_dissection"`` (METIS), ``"minimum_degree"`` (compiled, see
+    :func:`minimum_degree`: four to ten times cheaper to compute, a factor of about the same
+    size on surface meshes below about 10⁵ vertices, far larger on volumes and large
+    surfaces) or ``"auto"`` (the default): minimum degree, unless its factorization costs
+    more than :data:`AUTO_WIDTH` flops per stored entry, in which case nested dissection is
+    computed too and the ordering with fewer flops kept (``self.ordering`` says which).
     """
 
-    def __init__(self, A, ordering: str = "nested_dissection"):
+    def __init__(self, A, ordering: str = "auto"):
         if not isinstance(ordering, str) or ordering not in ORDERINGS:
             raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
         A = _symmetric_csc(A)
@@ -110,12 +140,19 @@ class Pattern:
         self.indices = pat.indices.astype(np.int32)
         # sorted keys col * n + row of the pattern's entries, in CSC order
         self._keys = np.repeat(np.arange(self.n, dtype=np.int64), np.diff(pat.indptr)) * self.n + pat.indices
-        if ordering == "minimum_degree":
-            perm = _ext().minimum_degree(self.indptr, self.indices)
+        ext = _ext()
+        if ordering == "nested_dissection":
+            sym = ext.Symbolic(self.indptr, self.indices, nested_dissection(pat))
         else:
-            perm = nested_dissection(pat)
+            sym = ext.Symbolic(self.indptr, self.indices, ext.minimum_degree(self.indptr, self.indices))
+            if ordering == "auto":
+                ordering = "minimum_degree"
+                if sym.flops > AUTO_WIDTH * sym.nnz_L:
+                    nd = ext.Symbolic(self.indptr, self.indices, nested_dissection(pat))
+                    if nd.flops < sym.flops:
+                        sym, ordering = nd, "nested_dissection"
         self.ordering = ordering
-        self.symbolic = _ext().Symbolic(self.indptr, self.indices, perm)
+        self.symbolic = sym
 
     @property
     def nnz_L(self) -> int:
@@ -150,6 +187,17 @@ class Pattern:
         return out
 
 
+def _one_nonzero_per_column(B):
+    """(rows, values) if every column of the dense B holds exactly one nonzero, else None."""
+    if B.ndim != 2 or B.size == 0 or sp.issparse(B):
+        return None
+    nz = B != 0
+    if not np.all(np.count_nonzero(nz, axis=0) == 1):
+        return None
+    rows = np.argmax(nz, axis=0)
+    return rows, B[rows, np.arange(B.shape[1])]
+
+
 class LDLT:
     """``A = P L D Lᵀ Pᵀ`` of a sparse symmetric matrix (real or complex symmetric)."""
 
@@ -176,8 +224,29 @@ class LDLT:
             raise ValueError(f"right-hand side must have {self.n} rows, got shape {b.shape}")
         if np.iscomplexobj(b) and self.dtype == np.float64:
             return self.solve(b.real) + 1j * self.solve(b.imag)
-        B = np.ascontiguousarray(b.reshape(self.n, -1), dtype=self.dtype)
+        B = b.reshape(self.n, -1)
+        unit = _one_nonzero_per_column(B)
+        if unit is not None:          # scaled columns of A^-1: a sparse forward substitution
+            rows, w = unit
+            X = self.inverse_columns(rows)
+            if not np.all(w == 1):
+                X *= w
+            return X.reshape(b.shape)
+        B = np.ascontiguousarray(B, dtype=self.dtype)
         return self._f.solve(B).reshape(b.shape)
+
+    def inverse_columns(self, idx) -> np.ndarray:
+        """(n, k) the columns ``idx`` of A⁻¹.
+
+        The forward substitution of a unit vector is nonzero only on the path from its row to
+        the root of the elimination tree, so it runs on each supernode for just the columns
+        whose rows lie below it (one contiguous range, the columns sorted by elimination order);
+        the backward substitution is dense.
+        """
+        idx = np.ascontiguousarray(np.asarray(idx).reshape(-1), dtype=np.int64)
+        if idx.size and (idx.min() < 0 or idx.max() >= self.n):
+            raise ValueError(f"column indices must lie in [0, {self.n}), got range [{idx.min()}, {idx.max()}]")
+        return self._f.inverse_columns(idx)
 
     def inverse_diagonal(self) -> np.ndarray:
         """diag(A⁻¹) by selected inversion."""
