@@ -579,6 +579,23 @@ def heat_diagonals(lap, times, tol: float = 1e-8) -> MultiDiagonal:
     return lap.cache.fetch("diagonal", key, build)
 
 
+#: pole solutions held before they are added to every time's columns at once (one matrix
+#: product per batch instead of one pass over the output per pole and time)
+COLUMN_BATCH_BYTES = 512 * 2 ** 20
+
+
+def _accumulate(O, terms, chunk: int = 1 << 16):
+    """O (T, N) += sum of outer products w (T,) x (N,) over terms [(w, x)], x any (.., ..)
+    array of N entries: one (T, b) by (b, N) product, in column chunks."""
+    if not terms:
+        return
+    W = np.stack([np.asarray(w, dtype=float).reshape(-1) for w, _ in terms], axis=1)
+    xs = [x.reshape(-1) for _, x in terms]
+    for c0 in range(0, O.shape[1], chunk):
+        c1 = min(c0 + chunk, O.shape[1])
+        O[:, c0:c1] += W @ np.stack([x[c0:c1] for x in xs])
+
+
 def heat_columns(lap, times, sources, tol: float = 1e-8):
     r"""Heat-kernel columns :math:`K_t B^{-1}`-deltas at many times and sources at once.
 
@@ -612,9 +629,11 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
     # one (n, m) slab per time, updated in place: the output is the memory, not its copies
     out = np.zeros((u.size, lap.n, idx.size))
     eps = np.empty(u.size)
+    O = out.reshape(u.size, -1)
     Minv = None
     for g, upper, real, fits, e in _heat_plan(lap, u, tol, targets=float(tol)):
         al, C = _coefficients(fits, upper, real)
+        sl = slice(int(g[0]), int(g[-1]) + 1)          # a group is a run of the sorted times
         eps[g] = e
         if np.all(e + np.abs(al) <= tol):
             # alpha0 B^-1 E would cost a solve with B: dropped, and counted in the bound
@@ -622,18 +641,20 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
         else:
             if Minv is None:
                 Minv = mass_solve(lap, E)
-            for q, k in enumerate(g):
-                out[k] += al[q] * Minv
+            _accumulate(O[sl], [(al, Minv)])
+        batch, held = [], 0
         for j, (z, fac) in enumerate(_factorizations(lap, upper, real)):
             X = fac.solve(E)
             del fac
-            Xr, Xi = X.real, X.imag
-            for q, k in enumerate(g):
-                if j < upper.size:         # a conjugate pair: 2 Re(c x)
-                    out[k] += (2.0 * C[q, j].real) * Xr
-                    out[k] -= (2.0 * C[q, j].imag) * Xi
-                else:
-                    out[k] += C[q, j].real * Xr
+            if j < upper.size:             # a conjugate pair: 2 Re(c x)
+                batch += [(2.0 * C[:, j].real, X.real), (-2.0 * C[:, j].imag, X.imag)]
+            else:
+                batch.append((C[:, j].real, X.real))
+            held += X.nbytes
+            if held > COLUMN_BATCH_BYTES:
+                _accumulate(O[sl], batch)
+                batch, held = [], 0
+        _accumulate(O[sl], batch)
     if not np.array_equal(inv, np.arange(inv.size)):
         out = out[inv]
     return np.moveaxis(out, 0, -1), eps[inv]
