@@ -584,16 +584,23 @@ def heat_diagonals(lap, times, tol: float = 1e-8) -> MultiDiagonal:
 COLUMN_BATCH_BYTES = 512 * 2 ** 20
 
 
-def _accumulate(O, terms, chunk: int = 1 << 16):
+def _accumulate(O, terms, chunk: int = 4096):
     """O (T, N) += sum of outer products w (T,) x (N,) over terms [(w, x)], x any (.., ..)
-    array of N entries: one (T, b) by (b, N) product, in column chunks."""
+    array of N entries: one (T, b) by (b, N) product, by column chunks small enough for the
+    cache (so that O is read and written once)."""
     if not terms:
         return
     W = np.stack([np.asarray(w, dtype=float).reshape(-1) for w, _ in terms], axis=1)
     xs = [x.reshape(-1) for _, x in terms]
+    X = np.empty((len(xs), chunk))
+    tmp = np.empty((O.shape[0], chunk))
     for c0 in range(0, O.shape[1], chunk):
         c1 = min(c0 + chunk, O.shape[1])
-        O[:, c0:c1] += W @ np.stack([x[c0:c1] for x in xs])
+        w = c1 - c0
+        for r, x in enumerate(xs):
+            X[r, :w] = x[c0:c1]
+        np.matmul(W, X[:, :w], out=tmp[:, :w])
+        O[:, c0:c1] += tmp[:, :w]
 
 
 def heat_columns(lap, times, sources, tol: float = 1e-8):
