@@ -121,7 +121,7 @@ def intrinsic_cotan_stiffness(V, F, n: int | None = None) -> sp.csr_matrix:
 
         warnings.warn(f"triangles too thin for their edge lengths: every length mollified by {delta:.3g} "
                       f"({delta / float(l.mean() - delta):.2g} of the mean) before the intrinsic Delaunay flips",
-                      RuntimeWarning, stacklevel=3)
+                      RuntimeWarning, stacklevel=4)
     l, Fi = intrinsic_delaunay(l, F)
     h = 0.5 * corner_cotangents(l)              # half the cotangent of the corner opposite each edge
     W = np.zeros((len(Fi), 3, 3))
