@@ -55,11 +55,6 @@ def lawson_lstsq(A, y, iterations: int):
     return best
 
 
-#: degrees of the Carathéodory--Fejér heat approximants tried, cheapest first: an odd degree
-#: adds one real pole (a real factorization) to the conjugate pairs of the even degree below
-CF_DEGREES = tuple(range(2, 17))
-
-
 @lru_cache(maxsize=None)
 def cf_exp(r: int):
     r"""Near-best rational approximation of :math:`e^{-x}` on :math:`[0, \infty)`, type (r, r).
@@ -379,7 +374,7 @@ class RationalPlan:
         self.pf = None
         if filt.kind == "heat":
             t = filt.params["t"]
-            degrees = [int(degree)] if degree is not None else CF_DEGREES
+            degrees = [int(degree)] if degree is not None else range(2, 17, 2)
             for r in degrees:
                 pf = PartialFractions(*cf_exp(r)[:3], sigma=t)
                 err = certify(pf, filt, a, b, tol)

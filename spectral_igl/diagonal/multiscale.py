@@ -39,7 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._validate import describe
-from ..approx.rational import CF_DEGREES, PartialFractions, certifiable, certify, cf_exp, rounding
+from ..approx.rational import PartialFractions, certifiable, certify, cf_exp, rounding
 from ..filters import Filter, heat
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import lambda_min_positive, lambda_min_positive_kind, ldlt, ldlt_factor, mass_solve
@@ -95,10 +95,6 @@ def _hyperbola(K: int, params, t2: float):
     return -z[1:], np.array([-z[0].real])
 
 
-#: Carathéodory--Fejér degrees for one time alone (below 8 none meets an engine tolerance)
-SINGLE_DEGREES = tuple(r for r in CF_DEGREES if r >= 8)
-
-
 def heat_poles(t1: float, t2: float, K: int | None = None):
     """Candidate common pole sets for :math:`e^{-ts}`, :math:`t \\in [t_1, t_2]`, fewest first.
 
@@ -108,7 +104,7 @@ def heat_poles(t1: float, t2: float, K: int | None = None):
     """
     lam = t2 / t1
     if lam <= 1.0 + 1e-12:
-        for r in SINGLE_DEGREES:
+        for r in range(8, 17, 2):
             _, _, P, _ = cf_exp(r)
             yield P[P.imag > 1e-10] / t2, P[np.abs(P.imag) <= 1e-10].real / t2
         return
@@ -470,7 +466,7 @@ def heat_targets(lap, times, tol: float, scalar: bool = False):
         # what the Carathéodory--Fejér approximants certify at this time (about twice their
         # sampled error plus the rounding term), the best of degrees 8 to 16
         best = min(2.0 * cf_exp(r)[3] + rounding(PartialFractions(*cf_exp(r)[:3], sigma=t), 0.0, b, b)
-                   for r in SINGLE_DEGREES)
+                   for r in range(8, 17, 2))
         out[k] = tol_adj if best <= tol_adj else best
     if scalar:
         return out, np.minimum(out, max(tol_adj, SCALAR_FLOOR))
@@ -514,7 +510,7 @@ def _heat_plan(lap, times, tol, targets=None):
 def _cf_single(filt, t, target, b):
     """One time alone: the Carathéodory--Fejér partial fractions, as the one-time path uses
     them (the lowest degree meeting the target, else degree 16)."""
-    for r in SINGLE_DEGREES:
+    for r in range(8, 17, 2):
         a0, c, p, _ = cf_exp(r)
         pf = PartialFractions(a0, c, p, sigma=t)
         eps = certify(pf, filt, 0.0, b) + rounding(pf, 0.0, b, b)
