@@ -16,25 +16,16 @@ the BLAS scipy links.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import median_time  # beside this script
 
 import spectral_igl as sig
 from spectral_igl.io import read_mesh
 from spectral_igl.linalg import factorize, ldlt
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def median_time(fn, repeat):
-    ts, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts)), out
 
 
 def main():

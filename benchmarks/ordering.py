@@ -9,25 +9,16 @@ factor L under each ordering, and one numeric factorization's time under each.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import median_time  # beside this script
 
 import spectral_igl as sig
 from spectral_igl.io import read_mesh
 from spectral_igl.linalg import ldlt
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def median_time(fn, repeat):
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts)), out
 
 
 def main():
@@ -47,7 +38,7 @@ def main():
         t_md, perm = median_time(lambda: ldlt.minimum_degree(A), args.repeat)
         assert np.array_equal(np.sort(perm), np.arange(lap.n))
         t_nd, _ = median_time(lambda: ldlt.nested_dissection(A), args.repeat)
-        nd = ldlt.Pattern(A)
+        nd = ldlt.Pattern(A, ordering="nested_dissection")
         f_md, _ = median_time(lambda: ldlt.LDLT(A, md), args.repeat)
         f_nd, _ = median_time(lambda: ldlt.LDLT(A, nd), args.repeat)
         print(f"| {name} | {lap.n:,} | {1e3 * t_md:.1f} | {1e3 * t_nd:.1f} | {md.nnz_L:,} | {nd.nnz_L:,} | "

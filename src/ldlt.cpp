@@ -65,22 +65,22 @@ void gemm(char ta, char tb, int m, int n, int k, T alpha, const T *A, int lda, c
                                          const_cast<T *>(B), &ldb, &beta, C, &ldc);
 }
 
-// B (m x n, ldb) = alpha op(A)^-1 B (side 'L') or alpha B op(A)^-1 (side 'R'), A triangular
+// B (m x n, ldb) = alpha op(A)^-1 B / alpha B op(A)^-1 (trsm, side 'L' / 'R') or
+// alpha op(A) B (trmm), A triangular
 template <class T>
-void trsm(char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
+void trxm(bool solve, char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
     if (m <= 0 || n <= 0) return;
     trxm_t<T> f;
-    if constexpr (std::is_same_v<T, double>) f = dtrsm; else f = ztrsm;
+    if constexpr (std::is_same_v<T, double>) f = solve ? dtrsm : dtrmm; else f = solve ? ztrsm : ztrmm;
     f(&side, &uplo, &ta, &diag, &m, &n, &alpha, const_cast<T *>(A), &lda, B, &ldb);
 }
-
-// B = alpha op(A) B (side 'L'), A triangular
+template <class T>
+void trsm(char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
+    trxm<T>(true, side, uplo, ta, diag, m, n, alpha, A, lda, B, ldb);
+}
 template <class T>
 void trmm(char side, char uplo, char ta, char diag, int m, int n, T alpha, const T *A, int lda, T *B, int ldb) {
-    if (m <= 0 || n <= 0) return;
-    trxm_t<T> f;
-    if constexpr (std::is_same_v<T, double>) f = dtrmm; else f = ztrmm;
-    f(&side, &uplo, &ta, &diag, &m, &n, &alpha, const_cast<T *>(A), &lda, B, &ldb);
+    trxm<T>(false, side, uplo, ta, diag, m, n, alpha, A, lda, B, ldb);
 }
 }  // namespace blas
 

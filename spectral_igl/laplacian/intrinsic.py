@@ -80,14 +80,17 @@ def mollify(l, factor: float) -> tuple[np.ndarray, float]:
     return (l + delta if delta > 0 else l), delta
 
 
-def corner_cotangents(l) -> np.ndarray:
+def corner_cotangents(l, area=None) -> np.ndarray:
     """(m, 3) cotangent of the angle at each corner of triangles with edge lengths ``l``
-    (``l[f, i]`` opposite corner i), the area by Kahan's formula (accurate for needles)."""
+    (``l[f, i]`` opposite corner i). The (m,) ``area`` defaults to Kahan's formula from the
+    lengths (accurate for needles that lengths still resolve); pass the cross-product area
+    where vertex positions are known."""
     l = np.asarray(l, dtype=np.float64)
-    s = np.sort(l, axis=1)[:, ::-1]
-    a, b, c = s[:, 0], s[:, 1], s[:, 2]
-    prod = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c))
-    area = 0.25 * np.sqrt(np.maximum(prod, 0.0))
+    if area is None:
+        s = np.sort(l, axis=1)[:, ::-1]
+        a, b, c = s[:, 0], s[:, 1], s[:, 2]
+        prod = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c))
+        area = 0.25 * np.sqrt(np.maximum(prod, 0.0))
     sq = l * l
     num = np.roll(sq, -1, axis=1) + np.roll(sq, -2, axis=1) - sq     # b² + c² - a² at each corner
     return num / (4.0 * np.maximum(area, np.finfo(float).tiny))[:, None]

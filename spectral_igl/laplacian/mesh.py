@@ -189,11 +189,12 @@ def voronoi_areas(V: np.ndarray, F: np.ndarray, meas: np.ndarray | None = None) 
     cotangents divide by the area from the cross product (``meas``), which stays accurate
     on needles whose edge lengths no longer resolve the area.
     """
-    from .intrinsic import edge_lengths
+    from .intrinsic import corner_cotangents, edge_lengths
 
     A = element_measures(V, F) if meas is None else np.asarray(meas, dtype=float)
-    sq = edge_lengths(V, F) ** 2                                   # opposite each corner
-    cot = (np.roll(sq, -1, axis=1) + np.roll(sq, -2, axis=1) - sq) / (4.0 * A[:, None])
+    l = edge_lengths(V, F)
+    sq = l * l                                                      # opposite each corner
+    cot = corner_cotangents(l, A)
     area = (np.roll(sq, -1, axis=1) * np.roll(cot, -1, axis=1) + np.roll(sq, -2, axis=1) * np.roll(cot, -2, axis=1)) / 8.0
     obtuse = cot < 0
     some = obtuse.any(axis=1)

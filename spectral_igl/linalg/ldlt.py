@@ -189,7 +189,7 @@ class Pattern:
 
 def _one_nonzero_per_column(B):
     """(rows, values) if every column of the dense B holds exactly one nonzero, else None."""
-    if B.ndim != 2 or B.size == 0 or sp.issparse(B):
+    if B.size == 0:
         return None
     nz = B != 0
     if not np.all(np.count_nonzero(nz, axis=0) == 1):
