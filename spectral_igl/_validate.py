@@ -17,6 +17,7 @@ __all__ = [
     "as_index",
     "as_indices",
     "as_positive",
+    "as_flag",
     "as_nonnegative",
     "describe",
     "as_mesh_arrays",
@@ -184,6 +185,13 @@ def _as_real(x, name: str) -> float:
     if not np.isfinite(x):
         raise ValueError(f"{name} must be finite, got {x}")
     return x
+
+
+def as_flag(x, name: str) -> bool:
+    """Validate a yes/no option: ``True`` or ``False`` only (never read by truthiness)."""
+    if not isinstance(x, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {describe(x)}")
+    return bool(x)
 
 
 def as_positive(x, name: str) -> float:

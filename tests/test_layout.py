@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1] / "spectral_igl"
 
 #: first dotted component below ``spectral_igl`` -> stage (lower imports nothing higher)
 STAGES = {
-    "_validate": 0, "_version": 0, "io": 0, "progress": 0,
+    "_validate": 0, "_version": 0, "io": 0, "progress": 0, "accuracy": 0,
     "laplacian": 1,
     "filters": 2,
     "linalg": 3,

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ._operator import Laplacian, as_laplacian
 
-__all__ = ["mass_ratio", "lambda_max", "lambda_max_kind"]
+__all__ = ["mass_ratio", "lambda_max", "lambda_max_kind", "entry_error", "metzler"]
 
 
 def mass_ratio(lap: Laplacian) -> float:
@@ -92,3 +92,43 @@ def lambda_max_kind(lap: Laplacian) -> str:
     if lap.lumped or (lap.domain in ("triangle", "tet") and lap.data.get("mass") == "full"):
         return "proof"
     return "estimate"
+
+
+def entry_error(lap: Laplacian, bnorm_error) -> np.ndarray:
+    r"""Per-entry bound from a B-norm bound: :math:`|e_j| \le \|e\|_B / \sqrt{c\,D_{jj}}`.
+
+    :math:`\|e\|_B^2 = e^\top B e \ge c\, e^\top D e \ge c\, D_{jj} e_j^2` with D the row sums
+    of B and c = :func:`mass_ratio` (a proof where :func:`lambda_max_kind` says so).
+
+    Parameters
+    ----------
+    lap : Laplacian
+    bnorm_error : float or (m,) float
+        Bounds of :math:`\|e\|_B` (one per column).
+
+    Returns
+    -------
+    (n,) float for a scalar bound, (n, m) float for m bounds.
+    """
+    lap = as_laplacian(lap)
+    b = np.asarray(bnorm_error, dtype=float)
+    w = 1.0 / np.sqrt(mass_ratio(lap) * lap.mass)
+    # rounded up: the square root and the product are each within one unit in the last place
+    w = w * (1.0 + 4.0 * np.finfo(float).eps)
+    return w * b if b.ndim == 0 else w[:, None] * b[None, :]
+
+
+def metzler(lap: Laplacian) -> bool:
+    r"""Whether :math:`-B^{-1}L` is a Metzler matrix: B diagonal and every off-diagonal entry of
+    L non-positive. Then :math:`e^{-t\tilde L}` is entrywise non-negative at every t, so is
+    the heat kernel, and every partial sum of its uniformization series is too."""
+    lap = as_laplacian(lap)
+
+    def build():
+        if not lap.lumped:
+            return False
+        L = sp.coo_matrix(lap.L)
+        off = L.row != L.col
+        return bool(not np.any(L.data[off] > 0))
+
+    return lap.cache.fetch("bound", "metzler", build)
