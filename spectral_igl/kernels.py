@@ -15,11 +15,13 @@ import numbers
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_positive, check_dense_size
+from . import accuracy
+from ._validate import as_delta, as_flag, as_index, as_indices, as_positive, as_tol, check_dense_size
 from .approx import spectral_operator
+from .approx.uniformization import metzler_heat, products_needed
 from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
-from .laplacian import Laplacian, as_laplacian
+from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, metzler
 
 __all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
            "block_sources", "MANY_SOURCES"]
@@ -73,17 +75,147 @@ def source_indices(sources, n: int):
     return as_indices(sources, n, "sources"), False
 
 
+#: default floor of the per-entry tolerance: entries below this fraction of their column's peak
+#: are not bound relatively
+FLOOR = 1e-10
+#: the smallest B-norm tolerance the engine is asked for when tightening for ``rtol``
+#: (below it the rounding of the solves dominates)
+TIGHTEST = 1e-13
+#: sparse products per block of columns that the cancellation-free heat path may take
+MAX_PRODUCTS = 20000
+
+
+def _column_info(lap, filt, K, bnorm, kind, method, tol):
+    """The accuracy ``info`` of kernel columns (:mod:`spectral_igl.accuracy`): the per-entry
+    bound from the B-norm bounds; heat columns of a Metzler operator clipped at 0 (the exact
+    kernel is non-negative there, so clipping only moves an entry closer to it)."""
+    bnorm = np.asarray(bnorm, dtype=float)
+    if kind is None or not np.all(np.isfinite(bnorm)):
+        return K, accuracy.info(np.full(K.shape, np.nan), None, method, tol=tol, bnorm_error=bnorm)
+    err = entry_error(lap, bnorm)
+    kind = accuracy.weakest(kind, lambda_max_kind(lap))
+    if filt.kind == "heat" and metzler(lap):
+        K = np.maximum(K, 0.0)
+    return K, accuracy.info(err, kind, method, tol=tol, bnorm_error=bnorm)
+
+
+def _misses(K, info, rtol, floor):
+    """Columns where an entry above ``floor`` of the column's peak is not proved within ``rtol``,
+    and the B-norm bound each column would need."""
+    mag = np.abs(K)
+    peak = np.max(mag, axis=0)
+    need = mag >= floor * peak[None, :]
+    rel = accuracy.relative_error(K, info["abs_error"])
+    bad = np.any(need & ~(rel <= rtol), axis=0)
+    # |e_j| <= bnorm * w_j, and rel <= rtol needs |e_j| <= rtol |K_j| / (1 + rtol)
+    w = info["abs_error"] / np.where(info["bnorm_error"] > 0, info["bnorm_error"], np.inf)[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        allowed = np.where(need, rtol / (1.0 + rtol) * mag / w, np.inf)
+    return bad, np.min(allowed, axis=0)
+
+
+def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
+    """Kernel columns with every entry above ``floor`` of its column's peak proved within
+    ``rtol`` of the truth, or a ValueError saying why not."""
+    K, bnorm = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol, return_bound=True)
+    op = spectral_operator(lap, filt, method, tol)
+    K, info = _column_info(lap, filt, K, bnorm, op.bound_kind, op.method, tol)
+    if info["bound_kind"] != "proof":
+        raise ValueError(f"rtol: the bound of method {op.method!r} for {filt!r} is "
+                         f"{'missing' if info['bound_kind'] is None else 'an estimate'}, so no entry can "
+                         f"be proved within rtol={rtol:g}; use method='auto' with a built-in filter")
+    bad, allowed = _misses(K, info, rtol, floor)
+    if not bad.any():
+        return K, dict(info, rtol=rtol, floor=floor, rel_error=accuracy.relative_error(K, info["abs_error"]))
+    norms = info["bnorm_error"] / tol if tol > 0 else None
+    want = float(np.min(0.5 * allowed[bad] / np.maximum(norms[bad], np.finfo(float).tiny)))
+    if method == "auto" and want >= TIGHTEST:
+        return _entrywise(lap, filt, idx, delta, method, want, rtol, floor)
+    if method == "auto" and filt.kind == "heat" and delta == "mass" and metzler(lap):
+        t = filt.params["t"]
+        work = products_needed(lap, t)
+        if work <= MAX_PRODUCTS:
+            G = np.zeros((lap.n, idx.size))
+            G[idx, np.arange(idx.size)] = 1.0 / lap.mass[idx]
+            U, err = metzler_heat(lap, t, G)
+            rel = accuracy.relative_error(U, err)
+            out = accuracy.info(err, "proof", "uniformization", tol=tol, rtol=rtol, floor=floor,
+                                rel_error=rel, bnorm_error=np.full(idx.size, np.nan), products=work)
+            if np.any((U >= floor * U.max(axis=0)[None, :]) & ~(rel <= rtol)):
+                raise ValueError(f"rtol={rtol:g}: not reached even without cancellation (rounding of "
+                                 f"{work} sparse products); ask for a larger rtol")
+            return U, out
+        why = (f"the cancellation-free evaluation needs {work} sparse products at t={t:g} "
+               f"(more than {MAX_PRODUCTS}: a large t, or elements that make lambda_max large)")
+    elif method != "auto":
+        why = f"method={method!r} was asked for; method='auto' tightens tol or avoids cancellation"
+    elif filt.kind == "heat":
+        why = ("the operator is not Metzler (a full mass matrix or positive off-diagonal stiffness), so "
+               "no cancellation-free evaluation applies")
+    else:
+        why = f"{filt!r} changes sign, so its small entries come from cancelling sums"
+    raise ValueError(f"rtol={rtol:g} above floor={floor:g} of the peak cannot be proved: the entries "
+                     f"need a B-norm accuracy of {want:.2g} relative, below what double precision "
+                     f"reaches ({TIGHTEST:g}), and {why}. Raise floor or rtol, or drop rtol for the "
+                     "B-norm bound (return_info=True gives every entry's bound)")
+
+
+def _kernel(lap, filt, sources, delta, method, tol, return_info, rtol, floor):
+    idx, scalar = source_indices(sources, lap.n)
+    return_info = as_flag(return_info, "return_info")
+    if rtol is not None:
+        rtol = as_tol(rtol, "rtol")
+        floor = as_tol(floor, "floor", allow_zero=True)
+        K, info = _entrywise(lap, filt, idx, delta, method, tol, rtol, floor)
+    else:
+        K, bnorm = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol, return_bound=True)
+        op = spectral_operator(lap, filt, method, tol)
+        K, info = _column_info(lap, filt, K, bnorm, op.bound_kind, op.method, tol)
+    if scalar:
+        K = K[:, 0]
+        info = {k: (v[:, 0] if isinstance(v, np.ndarray) and v.ndim == 2 else
+                    (float(v[0]) if isinstance(v, np.ndarray) and v.ndim == 1 else v))
+                for k, v in info.items()}
+    return (K, info) if return_info else K
+
+
 # ---------------------------------------------------------------------------------------
 # public API
 # ---------------------------------------------------------------------------------------
+_ACCURACY_DOC = r"""
+    tol : float
+        Target accuracy of the engine: the B-norm error of each column relative to
+        :math:`\|B^{-1}e_i\|_B`. A column whose bound misses it warns
+        (:class:`spectral_igl.accuracy.AccuracyWarning`).
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error``, a bound of the error
+        of **every entry**, ``bound_kind`` (``"proof"``/``"estimate"``), ``method``,
+        ``bnorm_error`` (each column's B-norm bound) and, with ``rtol``, ``rel_error``.
+        By default (no ``rtol``) an entry is within
+        :math:`\texttt{tol}\,\|B^{-1}e_i\|_B / \sqrt{c\,D_{jj}}` of the truth, D the lumped mass and
+        c = 1 for a lumped, 1/4 (1/5) for the full triangle (tet) mass: on a unit-area mesh of n
+        even vertices about ``tol * n`` absolute, against a peak of about :math:`1/(4\pi t)`, so
+        entries far below ``tol * n`` times the peak may carry no correct digit.
+    rtol, floor : float, optional
+        Per-entry accuracy on request: every entry at or above ``floor`` (default 1e-10) times its
+        column's peak is proved within ``rtol`` of the truth, relatively, or the call raises
+        ValueError with the reason. ``method="auto"`` first tightens ``tol`` (down to 1e-13),
+        then, for the heat kernel of a Metzler operator (lumped mass, non-negative weights),
+        evaluates without cancellation (:mod:`spectral_igl.approx.uniformization`: every entry
+        to about 1e-13 relative, at a cost of about :math:`1.6\,t\lambda` sparse products,
+        refused beyond 20,000).
+"""
+
+
 def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: str = "auto",
-                    tol: float = 1e-8):
+                    tol: float = 1e-8, return_info: bool = False, rtol: float | None = None,
+                    floor: float = FLOOR):
     r"""Columns :math:`K(:, i)` of the spectral kernel :math:`K = \varphi(\tilde L)B^{-1}`.
 
     .. math:: K(:, i) = \varphi(\tilde L) B^{-1} e_i = \sum_l \varphi(\lambda_l)\, x_l(i)\, x_l
 
     computed spectrum-free (one application of the engine per column), never from
-    truncated eigenpairs.
+    truncated eigenpairs, with a bound of every entry.
 
     Parameters
     ----------
@@ -100,39 +232,39 @@ def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: 
         Eq. (5) as printed): mesh dependent, offered for comparison only.
     method : str
         Approximation method of the engine (``"auto"``, ``"rational"``, ``"dense"``, ...).
-    tol : float
-        Target accuracy of the engine (B-norm, relative to the input).
-
+    {accuracy}
     Returns
     -------
     K : (n,) float for a single source, (n, m) float for m sources (complex for a
         complex filter such as the wave kernel).
+    info : dict, only with ``return_info`` (entries shaped as ``K``)
 
     Examples
     --------
     >>> import spectral_igl as sig
     >>> from data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
-    >>> k = sig.spectral_kernel(lap, sig.filters.heat(0.1), 0)
-    >>> k.shape
-    (162,)
+    >>> k, info = sig.spectral_kernel(lap, sig.filters.heat(0.1), 0, return_info=True)
+    >>> k.shape, info["bound_kind"], bool(info["abs_error"].max() < 1e-6)
+    ((162,), 'proof', True)
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
     delta = as_delta(delta)
-    idx, scalar = source_indices(sources, lap.n)
-    K = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol)
-    return K[:, 0] if scalar else K
+    return _kernel(lap, filt, sources, delta, method, tol, return_info, rtol, floor)
 
 
 def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: str = "auto",
-                tol: float = 1e-8):
+                tol: float = 1e-8, return_info: bool = False, rtol: float | None = None,
+                floor: float = FLOOR):
     r"""Columns of the heat kernel :math:`K_t = e^{-t\tilde L}B^{-1}`.
 
     .. math:: K_t(:, i) = e^{-t \tilde L} B^{-1} e_i = \sum_l e^{-t\lambda_l} x_l(i)\, x_l
 
-    ``t`` is physical time (no normalisation). See :func:`spectral_kernel` for the
-    parameters; returns (n,) for one source, (n, m) for m sources.
+    ``t`` is physical time (no normalisation). On a Metzler operator (lumped mass and
+    non-negative weights: ``sig.laplacian.metzler(lap)``) the exact kernel is non-negative and
+    so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
+    source, (n, m) for m sources.
 
     Examples
     --------
@@ -142,13 +274,23 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     >>> K = sig.heat_kernel(lap, 0.05, [0, 1])
     >>> bool(np.allclose(K.T @ lap.B @ np.ones(lap.n), 1.0))  # heat is conserved
     True
+    >>> k, info = sig.heat_kernel(lap, 1e-3, 0, rtol=1e-6, return_info=True)
+    >>> bool(np.all(info["rel_error"][k >= 1e-10 * k.max()] <= 1e-6))
+    True
     """
     t = as_positive(t, "t")
     lap = as_laplacian(lap)
+    delta = as_delta(delta)
     idx, scalar = source_indices(sources, lap.n)
-    if block_sources(lap, method, as_delta(delta), idx.size):
-        return heat_kernels(lap, [t], idx, tol=tol)[:, :, 0]
-    return spectral_kernel(lap, heat(t), sources, delta=delta, method=method, tol=tol)
+    if rtol is None and block_sources(lap, method, delta, idx.size):
+        K, info = heat_kernels(lap, [t], idx, tol=tol, return_info=True)
+        K, info = K[:, :, 0], {k: (v[..., 0] if isinstance(v, np.ndarray) and v.ndim == 3 else v)
+                               for k, v in info.items()}
+        return (K, info) if as_flag(return_info, "return_info") else K
+    return _kernel(lap, heat(t), sources, delta, method, tol, return_info, rtol, floor)
+
+
+spectral_kernel.__doc__ = spectral_kernel.__doc__.replace("    {accuracy}\n", _ACCURACY_DOC.lstrip("\n"))
 
 
 #: from this many sources on, ``method="auto"`` heat columns use the common-pole block solves
@@ -166,7 +308,8 @@ def block_sources(lap, method, delta, m) -> bool:
             and ldlt.available())
 
 
-def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False):
+def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False,
+                 return_info: bool = False):
     r"""Heat-kernel columns at many times and sources, sharing one set of poles.
 
     .. math:: K_t(:, i) = e^{-t\tilde L}B^{-1}e_i, \qquad
@@ -183,9 +326,15 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
         Positive times.
     sources : int or (m,) int
     tol : float
-        Certified B-norm error of each column relative to :math:`\|B^{-1}e_i\|_B`.
+        Certified B-norm error of each column relative to :math:`\|B^{-1}e_i\|_B`; a time whose
+        bound misses it warns (:class:`spectral_igl.accuracy.AccuracyWarning`).
     return_bound : bool
         Also return the (T,) certified :math:`\varepsilon_t`.
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` of every entry (shaped
+        as ``K``), ``bound_kind``, ``method`` (``"rational"``), ``eps`` (the :math:`\varepsilon_t`)
+        and ``bnorm_error``. Entries are bounded as in :func:`spectral_kernel`; heat columns of a
+        Metzler operator are clipped at 0.
 
     Returns
     -------
@@ -201,8 +350,26 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     ((162, 2, 2), True)
     """
     lap = as_laplacian(lap)
+    return_bound = as_flag(return_bound, "return_bound")
+    return_info = as_flag(return_info, "return_info")
+    tol = as_tol(tol)
     idx, scalar = source_indices(sources, lap.n)
     K, eps = heat_columns(lap, times, idx, tol=tol)
+    accuracy.warn_missed("heat_kernels", eps, tol)
+    if metzler(lap):           # the exact kernel is non-negative: clipping only gets closer
+        np.maximum(K, 0.0, out=K)
+    out = (K,)
+    if return_bound:
+        out += (eps,)
+    if return_info:
+        norm = np.sqrt(1.0 / (mass_ratio(lap) * lap.mass[idx]))          # >= ||B^-1 e_i||_B
+        bn = norm[:, None] * eps[None, :]                                  # (m, T)
+        err = entry_error(lap, bn.reshape(-1)).reshape(lap.n, idx.size, eps.size)
+        info = accuracy.info(err, lambda_max_kind(lap), "rational", tol=tol, eps=eps, bnorm_error=bn)
+        out += (info,)
     if scalar:
-        K = K[:, 0, :]
-    return (K, eps) if return_bound else K
+        out = (out[0][:, 0, :],) + out[1:]
+        if return_info:
+            out[-1]["abs_error"] = out[-1]["abs_error"][:, 0, :]
+            out[-1]["bnorm_error"] = out[-1]["bnorm_error"][0]
+    return out[0] if len(out) == 1 else out
