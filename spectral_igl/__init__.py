@@ -10,7 +10,7 @@ eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``diagonal`` (kernel diagonals
 ``kernels``, ``distances``, ``descriptors``, ``embedding`` -> ``applications`` ->
 ``quantity`` -> ``viz`` -> ``cli``.
 """
-from . import filters, linalg
+from . import accuracy, filters, linalg
 from ._validate import memory_budget, set_memory_budget
 from ._version import __version__
 from .applications import (
@@ -82,7 +82,7 @@ __all__ = [
     "lambda_min_positive",
     "eigs", "dense_eigs",
     # engine
-    "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
+    "accuracy", "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
     "spectral_kernel", "heat_kernel", "heat_kernels", "kernel_diagonal", "distance_colouring",
     "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",

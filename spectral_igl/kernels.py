@@ -15,7 +15,8 @@ import numbers
 
 import numpy as np
 
-from . import accuracy
+from .accuracy import info as make_info
+from .accuracy import relative_error, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_positive, as_tol, check_dense_size
 from .approx import spectral_operator
 from .approx.uniformization import metzler_heat, products_needed
@@ -91,12 +92,12 @@ def _column_info(lap, filt, K, bnorm, kind, method, tol):
     kernel is non-negative there, so clipping only moves an entry closer to it)."""
     bnorm = np.asarray(bnorm, dtype=float)
     if kind is None or not np.all(np.isfinite(bnorm)):
-        return K, accuracy.info(np.full(K.shape, np.nan), None, method, tol=tol, bnorm_error=bnorm)
+        return K, make_info(np.full(K.shape, np.nan), None, method, tol=tol, bnorm_error=bnorm)
     err = entry_error(lap, bnorm)
-    kind = accuracy.weakest(kind, lambda_max_kind(lap))
+    kind = weakest(kind, lambda_max_kind(lap))
     if filt.kind == "heat" and metzler(lap):
         K = np.maximum(K, 0.0)
-    return K, accuracy.info(err, kind, method, tol=tol, bnorm_error=bnorm)
+    return K, make_info(err, kind, method, tol=tol, bnorm_error=bnorm)
 
 
 def _misses(K, info, rtol, floor):
@@ -105,7 +106,7 @@ def _misses(K, info, rtol, floor):
     mag = np.abs(K)
     peak = np.max(mag, axis=0)
     need = mag >= floor * peak[None, :]
-    rel = accuracy.relative_error(K, info["abs_error"])
+    rel = relative_error(K, info["abs_error"])
     bad = np.any(need & ~(rel <= rtol), axis=0)
     # |e_j| <= bnorm * w_j, and rel <= rtol needs |e_j| <= rtol |K_j| / (1 + rtol)
     w = info["abs_error"] / np.where(info["bnorm_error"] > 0, info["bnorm_error"], np.inf)[None, :]
@@ -126,20 +127,23 @@ def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
                          f"be proved within rtol={rtol:g}; use method='auto' with a built-in filter")
     bad, allowed = _misses(K, info, rtol, floor)
     if not bad.any():
-        return K, dict(info, rtol=rtol, floor=floor, rel_error=accuracy.relative_error(K, info["abs_error"]))
+        return K, dict(info, rtol=rtol, floor=floor, rel_error=relative_error(K, info["abs_error"]))
     norms = info["bnorm_error"] / tol if tol > 0 else None
     want = float(np.min(0.5 * allowed[bad] / np.maximum(norms[bad], np.finfo(float).tiny)))
     if method == "auto" and want >= TIGHTEST:
         return _entrywise(lap, filt, idx, delta, method, want, rtol, floor)
     if method == "auto" and filt.kind == "heat" and delta == "mass" and metzler(lap):
         t = filt.params["t"]
-        work = products_needed(lap, t)
+        # truncation well below rtol * floor * peak, with peak >= 1 / area (heat is conserved)
+        # and max G = 1 / m_i
+        tail = 1e-3 * rtol * floor * float(np.min(lap.mass[idx])) / lap.area() if floor > 0 else 1e-300
+        work = products_needed(lap, t, tail)
         if work <= MAX_PRODUCTS:
             G = np.zeros((lap.n, idx.size))
             G[idx, np.arange(idx.size)] = 1.0 / lap.mass[idx]
-            U, err = metzler_heat(lap, t, G)
-            rel = accuracy.relative_error(U, err)
-            out = accuracy.info(err, "proof", "uniformization", tol=tol, rtol=rtol, floor=floor,
+            U, err = metzler_heat(lap, t, G, tail)
+            rel = relative_error(U, err)
+            out = make_info(err, "proof", "uniformization", tol=tol, rtol=rtol, floor=floor,
                                 rel_error=rel, bnorm_error=np.full(idx.size, np.nan), products=work)
             if np.any((U >= floor * U.max(axis=0)[None, :]) & ~(rel <= rtol)):
                 raise ValueError(f"rtol={rtol:g}: not reached even without cancellation (rounding of "
@@ -262,7 +266,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     .. math:: K_t(:, i) = e^{-t \tilde L} B^{-1} e_i = \sum_l e^{-t\lambda_l} x_l(i)\, x_l
 
     ``t`` is physical time (no normalisation). On a Metzler operator (lumped mass and
-    non-negative weights: ``sig.laplacian.metzler(lap)``) the exact kernel is non-negative and
+    non-negative weights: :func:`spectral_igl.laplacian.metzler`) the exact kernel is non-negative and
     so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
     source, (n, m) for m sources.
 
@@ -355,7 +359,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     tol = as_tol(tol)
     idx, scalar = source_indices(sources, lap.n)
     K, eps = heat_columns(lap, times, idx, tol=tol)
-    accuracy.warn_missed("heat_kernels", eps, tol)
+    warn_missed("heat_kernels", eps, tol)
     if metzler(lap):           # the exact kernel is non-negative: clipping only gets closer
         np.maximum(K, 0.0, out=K)
     out = (K,)
@@ -365,7 +369,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
         norm = np.sqrt(1.0 / (mass_ratio(lap) * lap.mass[idx]))          # >= ||B^-1 e_i||_B
         bn = norm[:, None] * eps[None, :]                                  # (m, T)
         err = entry_error(lap, bn.reshape(-1)).reshape(lap.n, idx.size, eps.size)
-        info = accuracy.info(err, lambda_max_kind(lap), "rational", tol=tol, eps=eps, bnorm_error=bn)
+        info = make_info(err, lambda_max_kind(lap), "rational", tol=tol, eps=eps, bnorm_error=bn)
         out += (info,)
     if scalar:
         out = (out[0][:, 0, :],) + out[1:]

@@ -71,9 +71,12 @@ def test_probing_local_heat_kernel_is_not_deflated():
     true = np.abs(est - ref) / ref
     assert info["k"] == 0
     assert info["colours"] < lap.n / 4
-    # measured: distance 8, 112 colours, 7.3e-5 (the sample vertices are exact)
+    # measured: distance 8, 112 colours, 7.3e-5 (the sample vertices are engine columns, within
+    # the engine's promise: |e_ii| <= tol ||B^-1 e_i||_B / sqrt(m_i) = tol / m_i, lumped mass)
     assert true.max() <= 2e-4
-    assert true[info["samples"]].max() <= 1e-10
+    s = info["samples"]
+    assert np.all(true[s] <= 1e-8 / lap.mass[s] / ref[s])
+    assert true[s].max() <= 1e-3 * true.max()
     # the reported (sample) error is faithful to the true one; measured 5.7e-5 vs 7.3e-5
     assert true.max() / 10 <= info["sample_rel_error"] <= 10 * true.max()
     # the former default (deflation with low eigenpairs) is ruined by the Gibbs tail

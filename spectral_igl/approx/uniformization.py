@@ -10,24 +10,27 @@ with unit row sums, and
 
 (uniformization). Applied to a non-negative G every term is non-negative, so no sum cancels:
 the rounding of each entry is relative to that entry, however small it is against the peak.
-Here :math:`\alpha` is a power of two (at least :math:`\tfrac98\max_j A_{jj}`, so
-:math:`P_{jj} \ge 1/9`) and t is split into :math:`s` (a power of two) steps of
-:math:`\Lambda = t\alpha/s \le` :data:`STEP` each, so that :math:`\Lambda` and
-:math:`P`'s off-diagonal entries carry no rounding from the scaling.
+Here :math:`\alpha = \tfrac{17}{16}\max_j A_{jj}` (so :math:`P_{jj} \ge 1/17` and the
+diagonal's rounding is relative too) and t is split into s steps of
+:math:`\Lambda = t\alpha/s \le` :data:`STEP` each. The rounding of :math:`\Lambda` moves the
+time by at most 4u relative, which moves every entry by a factor within
+:math:`e^{\pm 4u\,t\alpha}` (for a Metzler generator,
+:math:`e^{-\delta\alpha}K_t \le K_{t+\delta} \le e^{\delta\alpha}K_t` entrywise).
 
 **Bound of every entry.** Truncating a step after K terms leaves the non-negative remainder
 :math:`\sum_{k>K}\pi_k P^k v \le \Pr[\mathrm{Poisson}(\Lambda) > K]\,\|v\|_\infty` (P is
-stochastic), with the Chernoff bound :math:`\Pr[X \ge K+1] \le e^{-\Lambda}(e\Lambda/(K+1))^{K+1}`.
+stochastic).
 The exact step operator is non-negative and stochastic, so over s steps the truncation adds at
-most :math:`s\,\tau\,\|G\|_\infty` per entry, and componentwise relative rounding errors (the
-entries of P within :math:`9u`, each product within :math:`\gamma_r` for rows of r entries,
+most :math:`s\,\tau\,\|G\|_\infty` per entry (the tail :math:`\tau` bounded by
+:math:`\pi_{K+1}/(1 - \Lambda/(K+2))`), and componentwise relative rounding errors (the
+entries of P within :math:`33u`, each product within :math:`\gamma_r` for rows of r entries,
 the coefficients within :math:`\gamma_{2k} + 4u`, the sum within :math:`\gamma_{K+1}`, u the
 unit round-off) stay componentwise relative: :math:`|\tilde U - U| \le \rho\,\tilde U/(1-\rho)
 + s\tau\|G\|_\infty` with :math:`\rho = (1+\delta)^s - 1` and :math:`\delta` one step's relative
 rounding. ``exp`` is taken to be within 4 units in the last place (glibc's is within 1).
 
-The cost is about :math:`1.6\,t\alpha` sparse products per block of columns: cheap at small t,
-expensive where one poorly shaped element makes :math:`\alpha` large.
+The cost is about :math:`1.1\text{--}1.6\,t\alpha` sparse products per block of columns: cheap at
+small t, expensive where one poorly shaped element makes :math:`\alpha` large.
 """
 from __future__ import annotations
 
@@ -41,8 +44,8 @@ from ..laplacian import metzler
 __all__ = ["metzler_heat", "products_needed", "STEP", "TAIL"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
-STEP = 256.0
-#: Chernoff bound of each step's truncated Poisson tail, relative to max |input|
+STEP = 512.0
+#: default bound of the truncated Poisson tails (all steps), relative to each column's maximum
 TAIL = 1e-32
 U = 2.0 ** -53
 
@@ -52,48 +55,52 @@ def _gamma(k):
 
 
 def _rate(lap):
-    """(alpha, P) with alpha a power of two >= 9/8 max_j A_jj and P = I - A/alpha >= 0."""
+    """(alpha, P) with alpha = 17/16 max_j A_jj and P = I - A/alpha >= 0 (P_jj >= 1/17)."""
     L = sp.csr_matrix(lap.L, dtype=float)
     d = L.diagonal() / lap.mass
     top = float(np.max(d)) if d.size else 0.0
     if not top > 0:
         return 0.0, None
-    alpha = 2.0 ** math.ceil(math.log2(1.125 * top))
-    minv = 1.0 / lap.mass
-    P = sp.csr_matrix(-(sp.diags(minv) @ L) / alpha)
+    alpha = 1.0625 * top
+    P = sp.csr_matrix(sp.diags(-1.0 / (lap.mass * alpha)) @ L)
     P.setdiag(1.0 - d / alpha)
     P.eliminate_zeros()
     return alpha, P
 
 
-def _terms(lam):
-    """Smallest K with the Chernoff bound of P[Poisson(lam) > K] <= TAIL, and that bound."""
-    log_tail = math.log(TAIL)
+def _terms(lam, tail):
+    r"""Smallest K with P[Poisson(lam) > K] <= tail, and that tail's bound.
+
+    :math:`\Pr[X > K] \le \pi_{K+1}/(1 - \lambda/(K+2))` for :math:`K + 2 > \lambda` (the
+    ratios :math:`\pi_{k+1}/\pi_k = \lambda/(k+1)` decrease), with :math:`\pi_{K+1}` from
+    ``lgamma`` (taken within 1e-12 relative in the exponent's scale).
+    """
+    log_tail = math.log(tail)
     K = max(int(math.ceil(lam)), 1)
     while True:
-        j = K + 1
-        lt = -lam + j * (1.0 + math.log(lam) - math.log(j))
+        lp = -lam + (K + 1) * math.log(lam) - math.lgamma(K + 2)
+        lt = lp - math.log1p(-lam / (K + 2)) + 1e-12 * (lam + K + 2) * (1.0 + abs(math.log(lam)))
         if lt <= log_tail:
             return K, math.exp(lt)
-        K += max(1, K // 64)
+        K += max(1, K // 256)
 
 
 def _steps(t, alpha):
     total = t * alpha
-    s = 1 if total <= STEP else 2 ** math.ceil(math.log2(total / STEP))
-    return s, total / s          # t * alpha / s is exact: alpha and s are powers of two
+    s = max(1, int(math.ceil(total / STEP)))
+    return s, total / s
 
 
-def products_needed(lap, t: float) -> int:
+def products_needed(lap, t: float, tail: float = TAIL) -> int:
     """Sparse products (per block of columns) that :func:`metzler_heat` takes at time t."""
     alpha, _ = _rate(lap)
     if alpha == 0:
         return 0
     s, lam = _steps(t, alpha)
-    return s * _terms(lam)[0]
+    return s * _terms(lam, tail / s)[0]
 
 
-def metzler_heat(lap, t: float, G: np.ndarray):
+def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
     r""":math:`e^{-t\tilde L}G` for non-negative G on a Metzler Laplacian, with a bound of each entry.
 
     Parameters
@@ -103,6 +110,8 @@ def metzler_heat(lap, t: float, G: np.ndarray):
     t : float
     G : (n,) or (n, m) float, non-negative
         E.g. the discrete deltas :math:`B^{-1}e_i`.
+    tail : float
+        Allowed truncation, in total over the steps, relative to each column's maximum.
 
     Returns
     -------
@@ -123,9 +132,11 @@ def metzler_heat(lap, t: float, G: np.ndarray):
         err = np.zeros_like(V)
         return (V[:, 0], err[:, 0]) if one else (V, err)
     s, lam = _steps(t, alpha)
-    K, tail = _terms(lam)
+    K, step_tail = _terms(lam, tail / s)
     r = int(np.max(np.diff(P.indptr)))
-    eps1 = 9.0 * U + _gamma(r) * (1.0 + 9.0 * U)
+    # entries of P within 33u: off-diagonal three roundings; diagonal 1 - x with x within 2u
+    # relative, x / (1 - x) <= 16, and the subtraction's own rounding
+    eps1 = 33.0 * U + _gamma(r) * (1.0 + 33.0 * U)
     # one step, relative and componentwise: term k has k products and a coefficient within
     # gamma_2k + 4u, times (1 + u) for the product, and the sum of K+1 terms adds gamma_{K+1}
     delta = math.expm1(K * math.log1p(eps1) + math.log1p(_gamma(2 * K) + 4 * U) + math.log1p(U)) \
@@ -140,9 +151,11 @@ def metzler_heat(lap, t: float, G: np.ndarray):
             c *= lam / k
             W += c * p
         V = W
-    rho = math.expm1(s * math.log1p(delta))
+    # the steps apply the exact semigroup at t' = s lam / alpha, |t' - t| <= 4u t; for a Metzler
+    # generator K(t') / K(t) lies in [e^{-|t'-t| alpha}, e^{|t'-t| alpha}] entrywise
+    rho = math.expm1(s * math.log1p(delta) + 4.0 * U * t * alpha * (1.0 + 1e-6))
     # plus what underflow can lose: each of the s * (K + 1) products and sums of r + 1 terms
     # rounds an entry by at most one subnormal unit per term
     tiny = s * (K + 1) * (r + 2) * float(np.finfo(float).smallest_subnormal)
-    err = rho * V / (1.0 - rho) + s * tail * gmax[None, :] * (1.0 + 1e-6) + tiny
+    err = rho * V / (1.0 - rho) + s * step_tail * gmax[None, :] * (1.0 + 1e-6) + tiny
     return (V[:, 0], err[:, 0]) if one else (V, err)

@@ -14,7 +14,9 @@ gives selected inverses), SuperLU for indefinite matrices and as the fallback.
 """
 from __future__ import annotations
 
+import logging
 import numbers
+import time
 
 import numpy as np
 import scipy.sparse as sp
@@ -23,6 +25,8 @@ from .._validate import as_signal, check_finite_result, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from . import ldlt
 from .factor import available_backends, factorize
+
+log = logging.getLogger(__name__)
 
 __all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache"]
@@ -57,7 +61,12 @@ def ldlt_pattern(lap: Laplacian) -> ldlt.Pattern:
 
 def ldlt_factor(lap: Laplacian, A) -> ldlt.LDLT:
     """LDLᵀ of a matrix with the sparsity pattern of L + B (or a part of it), on the cached analysis."""
-    return ldlt.LDLT(A, ldlt_pattern(lap))
+    pattern = ldlt_pattern(lap)
+    start = time.perf_counter()
+    fac = ldlt.LDLT(A, pattern)
+    log.info("factorized n=%d nnz=%d with ldlt (%s) in %.3f s", A.shape[0], A.nnz, A.dtype,
+             time.perf_counter() - start)
+    return fac
 
 
 def _scalar(x, name):
