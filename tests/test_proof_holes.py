@@ -96,3 +96,63 @@ def test_selinv_power_diagonal_bound_covers_rounding(ill_conditioned, p):
         d, info = sig.kernel_diagonal(lap, SQUARED_POWERS[p](), method="selinv", return_info=True)
         assert info["bound_kind"] == "proof"
         assert np.max(np.abs(d - exact[p])) <= info["abs_error_bound"]
+
+
+# ----------------------------------------------------------------------------- 2. the kernel split
+def exact_projection(lap, f, rhs=False):
+    r""":math:`P_0f = 1_c(1_c^\top Bf)/(1_c^\top B1_c)` (:math:`P_0B^{-1}g`: :math:`1_c^\top g` on
+    top) in exact rational arithmetic from the float64 B and f: the heat filter's value at a
+    t where :math:`e^{-t\lambda_2}` underflows, and what the kernel split computes."""
+    B = lap.B.tocsr()
+    rows = [(B.indices[B.indptr[i]:B.indptr[i + 1]], B.data[B.indptr[i]:B.indptr[i + 1]]) for i in range(lap.n)]
+    fx = [Fraction(float(x)) for x in f]
+    Bf = fx if rhs else [sum((Fraction(float(v)) * fx[j] for j, v in zip(*r)), Fraction(0)) for r in rows]
+    B1 = [sum((Fraction(float(v)) for v in r[1]), Fraction(0)) for r in rows]
+    num, den = {}, {}
+    for i, c in enumerate(lap.components):
+        num[c] = num.get(c, 0) + Bf[i]
+        den[c] = den.get(c, 0) + B1[i]
+    return [num[c] / den[c] for c in lap.components]
+
+
+def exact_bnorm_error(lap, u, truth):
+    """||u - truth||_B with the difference taken exactly (then rounded once per entry)."""
+    d = np.array([float(Fraction(float(x)) - t) for x, t in zip(u, truth)])
+    return float(np.sqrt(d @ (lap.B @ d)))
+
+
+def cancelling_signals(lap, seed=1):
+    """A B-mean-free signal of size 1e6 (P0 f is 0 up to rounding), a large mean with mixed
+    signs, and a unit delta."""
+    rng = np.random.default_rng(seed)
+    n, one = lap.n, np.ones(lap.n)
+    g = 1e6 * rng.standard_normal(n)
+    return {"mean_free": g - (g @ (lap.B @ one)) / (one @ (lap.B @ one)),
+            "large_mean": 1e6 + rng.standard_normal(n) * np.where(rng.random(n) < 0.5, 1.0, 1e3),
+            "delta": np.eye(n)[:, n // 3]}
+
+
+@pytest.fixture(scope="module")
+def split_laps():
+    """A flat jittered rectangle with boundary (full mass) and a tetrahedral box (lumped), plus
+    two components (full mass): the projection is per component."""
+    V, Fc = graded_strip(10, 6, 0.05)
+    two = (np.vstack([V, V + [2.0, 0, 0]]), np.vstack([Fc, Fc + len(V)]))
+    return {"strip_full": sig.laplacian(V, Fc, mass="full"),
+            "tets_lumped": sig.laplacian(*box_tets((3, 3, 2))),
+            "two_full": sig.laplacian(*two, mass="full")}
+
+
+@pytest.mark.parametrize("method", ["shift_invert", "krylov", "contour", "rational"])
+@pytest.mark.parametrize("t", [1e7, 1e12, 6e18])
+def test_heat_at_large_t_bound_covers_projection_rounding(split_laps, method, t):
+    """At a t where the heat is the projection onto the constants, the allowance for the
+    exact kernel part was scaled to the result: 3e14 times too small for a mean-free signal."""
+    for name, lap in split_laps.items():
+        op = sig.SpectralOperator(lap, F.heat(t), method=method)
+        for sname, f in cancelling_signals(lap).items():
+            for rhs in (False, True):
+                u = op.apply_inverse_mass(f) if rhs else op.apply(f)
+                err = exact_bnorm_error(lap, u, exact_projection(lap, f, rhs))
+                assert op.bound_kind == "proof"
+                assert err <= op.error_bound, (name, sname, rhs, err, op.error_bound)
