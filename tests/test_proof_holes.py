@@ -177,3 +177,25 @@ def test_lanczos_estimate_sees_a_narrow_bump(method):
         err = float(np.sqrt(d @ (lap.B @ d)))
         # the dense reference carries about 1e-12 ||f||_B of its own rounding
         assert err <= op.error_bound + 1e-11 * fnorm, (t, err, op.error_bound)
+
+
+# ----------------------------------------------------------------------------- the same elsewhere
+def test_heat_diagonal_at_large_t_bound_is_not_zero(split_laps):
+    """At a t where e^{-t lambda_2} underflows, the diagonal is 1/V_c (the projection) and its
+    bound was e^{-t lambda_2} (B^-1)_ii = 0 as a proof, with the sum of the masses rounded."""
+    errors = []
+    for name, lap in split_laps.items():
+        for delta in ("mass", "seed") if lap.lumped else ("mass",):
+            d, info = sig.kernel_diagonal(lap, F.heat(1e12), delta=delta, return_info=True)
+            assert info["method"] == "projection" and info["bound_kind"] == "proof"
+            B = lap.B.tocsr()
+            vol, rows = {}, []
+            for i, c in enumerate(lap.components):
+                row = sum((Fraction(float(v)) for v in B.data[B.indptr[i]:B.indptr[i + 1]]), Fraction(0))
+                rows.append(row)
+                vol[c] = vol.get(c, 0) + row
+            exact = [(rows[i] ** 2 if delta == "seed" else 1) / vol[c] for i, c in enumerate(lap.components)]
+            err = max(abs(Fraction(float(x)) - e) for x, e in zip(d, exact))
+            assert err <= info["abs_error_bound"], (name, delta, float(err), info["abs_error_bound"])
+            errors.append(err)
+    assert max(errors) > 0          # the rounding is really there

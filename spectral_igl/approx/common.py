@@ -80,6 +80,20 @@ def _projection_constants(lap: Laplacian):
     return lap.cache.fetch("basis", "projection_rounding", build)
 
 
+def mass_sum_rounding(lap: Laplacian):
+    r"""``(row, vol)``: per vertex, bounds of the relative rounding of ``lap.mass`` (the row
+    sums of B, k terms each: :math:`\gamma_k (|B|1)_i / m_i`) and of
+    :meth:`~spectral_igl.laplacian.Laplacian.component_volume` (those row sums summed over the
+    :math:`n_c` vertices of the component: :math:`\gamma_{k + n_c}\,1_c^\top|B|1 / \hat V_c`)."""
+    absB = abs(lap.B).tocsr()
+    k = int(np.max(np.diff(absB.indptr))) if lap.n else 1
+    comp = lap.components
+    size = np.bincount(comp, minlength=lap.n_components)[comp]
+    rowabs = np.asarray(absB.sum(axis=1)).ravel()
+    absvol = np.bincount(comp, weights=rowabs, minlength=lap.n_components)[comp]
+    return gamma(k) * rowabs / lap.mass, gamma(k + size) * absvol / lap.component_volume()
+
+
 def projection_rounding(lap: Laplacian, y_abs: np.ndarray, with_mass: bool) -> np.ndarray:
     r"""Entrywise bound of :math:`|Z\,\mathrm{fl}(Z^\top y) - P_0f|` as computed by
     :meth:`~spectral_igl.laplacian.Laplacian.component_basis` (the projection onto the
