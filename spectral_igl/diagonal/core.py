@@ -28,7 +28,10 @@ of any single solve. Methods:
     :math:`\mathrm{diag}(XBX)` the complex-step derivative of
     :math:`\mathrm{diag}((L_g - zB)^{-1})` at z = 0 (one complex factorization). Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
     :math:`\varepsilon = \max|\varphi - r|` on the spectrum (reported as
-    ``abs_error_bound``), and the error is also measured at ``samples`` vertices.
+    ``abs_error_bound``), and the error is also measured at ``samples`` vertices. The exact
+    paths (and the circle rule of :math:`s^{-p}`, p >= 3) report an a-priori rounding
+    allowance instead, which grows with :math:`\lambda_{\max}/\lambda_{\min}^+`
+    (64 ε p (1 + κ) times the magnitudes of the terms summed, κ the spectrum's ratio).
 ``"probing"``
     Spectrum-free estimator: probing vectors built from a distance-``D`` colouring of
     the mesh graph (two vertices of one colour are more than ``D`` edges apart), so that
