@@ -100,7 +100,9 @@ def test_selinv_is_what_auto_uses_and_falls_back(lap_torus):
     assert info["method"] == "selinv" and info["bound_kind"] == "proof"
     ref = np.diag(dense_kernel(lap, lambda s: np.where(s > 0, s ** -3.0, 0.0), True))
     assert np.abs(d - ref).max() <= info["abs_error_bound"] + 1e-13 * ref.max()
-    assert info["abs_error_bound"] <= 1e-10 * ref.max()
+    # the bound is the proved aliasing (3.5e-12 relative) plus the a-priori rounding allowance
+    # 64 eps p (1 + 3 lambda_max / lambda_min+) per unit of the terms' magnitudes (a few 1e-9 here)
+    assert info["abs_error_bound"] <= 1e-8 * ref.max()
     # s^-2.5 has no rational fit with poles away from 0: auto falls back, selinv refuses
     poly5 = F.polyharmonic(5)
     d, info = sig.kernel_diagonal(lap, poly5, return_info=True)

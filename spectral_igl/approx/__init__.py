@@ -60,7 +60,8 @@ from .._validate import as_int, as_positive, as_signal, as_tol, check_spectral_f
 from ..filters import Filter, as_filter
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
-from .common import EPS, bnorm, certified_sup, filter_d2, inv_bnorm_upper, sup_error
+from .common import (EPS, abs_bnorm, abs_mass_apply, bnorm, filter_sup, inv_bnorm_upper, mass_rounding,
+                     projection_rounding)
 from .contour import ContourPlan
 from .krylov import KrylovPlan, ShiftInvertPlan
 from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
@@ -367,14 +368,18 @@ class SpectralOperator(spla.LinearOperator):
         lap = self.lap
         f = as_signal(f, lap.n, "g" if rhs else "f")
         kernel_part = None
-        if self.filter.singular or self.split:
+        split = self.filter.singular or self.split
+        if split:
             Z = lap.component_basis()
             c0 = Z.T @ f if rhs else Z.T @ (lap.B @ f)       # P0 f = Z c0 (P0 B^-1 g for rhs)
-            f = f - lap.B @ (Z @ c0) if rhs else f - Z @ c0
+            p0 = Z @ c0
+            e_p0 = projection_rounding(lap, np.abs(f) if rhs else abs_mass_apply(lap, f), not rhs)
+            f = f - lap.B @ p0 if rhs else f - p0
             if self.split and self.phi0 != 0:
                 kernel_part = Z @ (self.phi0 * c0)
         u, src, scal = self.plan.apply(f, rhs)
-        if self.filter.singular or self.split:
+        if split:
+            u_plan = u
             u = lap.project_out_kernel(u)
         if kernel_part is not None:
             u = u + kernel_part
@@ -391,8 +396,8 @@ class SpectralOperator(spla.LinearOperator):
             else:
                 norm = inv_bnorm_upper(lap, f)
             bound = scal * norm + getattr(self.plan, "residual_bound", 0.0)
-            if kernel_part is not None:    # rounding of the exact kernel part (sums of n terms)
-                bound = bound + (8.0 + 2.0 * np.sqrt(lap.n)) * EPS * bnorm(lap, kernel_part)
+            if split:
+                bound = bound + self._split_rounding(f, p0, u, u_plan, kernel_part, e_p0, scal, rhs)
             bound = np.asarray(bound, dtype=float)
             if not np.all(np.isfinite(bound)):
                 raise ValueError(f"method {self.method!r} cannot bound its error for {self.filter!r} on "
@@ -402,6 +407,34 @@ class SpectralOperator(spla.LinearOperator):
         if not self.filter.is_complex and np.isrealobj(f) and np.iscomplexobj(u):
             u = u.real
         return u
+
+    def _split_rounding(self, rem, p0, u, u_plan, kernel_part, e_p0, scal, rhs):
+        r"""B-norm bound of the rounding of the kernel split (entrywise bounds, see
+        :func:`.common.projection_rounding`), each scaled to the magnitudes that cancel:
+
+        - :math:`\varphi(0)P_0f`: the projection's rounding ``e_p0`` and the product by φ(0);
+        - the remainder :math:`f - P_0f` handed to the method is off by ``e_p0`` and the
+          subtraction (for a kernel column also the product by B): the method maps that
+          error through :math:`|r| \le \max_{[a, \lambda_{\max}]}|\varphi|` + its scalar error;
+        - the projection of the method's result off ker L, and the final sum.
+        """
+        lap, half = self.lap, 0.5 * EPS
+        e_sub = half * np.abs(rem)
+        if rhs:
+            e_in = abs_bnorm(lap, e_p0) + inv_bnorm_upper(lap, e_sub + mass_rounding(lap, p0))
+        else:
+            e_in = abs_bnorm(lap, e_p0 + e_sub)
+        sup = getattr(self, "_phi_sup", None)
+        if sup is None:
+            sup = self._phi_sup = (self.plan.scalar_error if isinstance(self.plan, ZeroPlan)
+                                   else filter_sup(self.filter, self.a, self.lambda_max)[0])
+        e_proj = projection_rounding(lap, abs_mass_apply(lap, u_plan), True)
+        # the subtraction of the projection and the sum with the kernel part: u each, on
+        # |u - kernel_part| <= |u| + |kernel_part| and on |u|
+        out = e_proj + (1.0 + EPS) * half * (2.0 * np.abs(u))
+        if kernel_part is not None:
+            out = out + abs(self.phi0) * e_p0 * (1.0 + half) + 2.0 * half * np.abs(kernel_part)
+        return abs_bnorm(lap, out) + (sup + scal) * e_in
 
 
 class ZeroPlan:
@@ -415,14 +448,9 @@ class ZeroPlan:
 
     @classmethod
     def attempt(cls, filt, a, b, tol):
-        d2 = filter_d2(filt)
-        with np.errstate(all="ignore"):
-            if d2 is not None:
-                top = certified_sup(lambda s: (filt(s), np.abs(filt(s))), d2, a, b, tol, n=200)
-            else:
-                top = sup_error(filt, a, b, n=500)
+        top, proved = filter_sup(filt, a, b, tol)
         if np.isfinite(top) and top <= 0.5 * tol:
-            return cls(float(top), d2 is not None)
+            return cls(float(top), proved)
         return None
 
     def apply(self, f, rhs):

@@ -42,6 +42,102 @@ def inv_bnorm_upper(lap: Laplacian, g: np.ndarray) -> np.ndarray:
     return np.sqrt(np.real(np.sum(np.abs(g) ** 2 / d, axis=0)) / mass_ratio(lap))
 
 
+def abs_bnorm(lap: Laplacian, e: np.ndarray) -> np.ndarray:
+    r""":math:`\sqrt{|e|^\top|B|\,|e|} \ge \|x\|_B` for every x with :math:`|x| \le e`
+    entrywise (the B-norm of a vector known only through a bound of each entry)."""
+    e = np.abs(e)
+    absB = lap.cache.fetch("basis", "abs_mass", lambda: abs(lap.B).tocsr())
+    return np.sqrt(np.sum(e * (absB @ e), axis=0)) * (1.0 + 4 * EPS)
+
+
+# ----------------------------------------------------------------------------- rounding of P0
+def gamma(k) -> np.ndarray:
+    r""":math:`\gamma_k = ku/(1 - ku)`, u = ε/2: the relative rounding of k chained flops
+    (Higham, *Accuracy and Stability of Numerical Algorithms*, §3.1)."""
+    ku = np.asarray(k, dtype=float) * (0.5 * EPS)
+    return ku / (1.0 - ku)
+
+
+def _projection_constants(lap: Laplacian):
+    r"""Per vertex: :math:`\hat V` of its component, the relative error of
+    :math:`\hat z^2 = 1/\hat V` (each factor of ``component_basis``), the component's size and
+    the longest row of B."""
+    def build():
+        absB = abs(lap.B).tocsr()
+        k = int(np.max(np.diff(absB.indptr))) if lap.n else 1
+        comp = lap.components
+        size = np.bincount(comp, minlength=lap.n_components)[comp]
+        Z = lap.component_basis()
+        vhat = 1.0 / np.asarray(Z.multiply(Z).sum(axis=1)).ravel()          # 1 / z_c^2
+        absvol = np.bincount(comp, weights=np.asarray(absB.sum(axis=1)).ravel(),
+                             minlength=lap.n_components)[comp]
+        # V^ = 1^T (B 1) (row sums of k terms, then a sum of n_c terms), z = 1/sqrt(V^)
+        # with two more roundings, and z^2 = 1/V^ itself rounded once more in vhat
+        theta = gamma(k + size + 8) * absvol / vhat
+        theta = np.minimum(theta, 0.5)
+        alpha = theta / (2.0 * (1.0 - theta)) + gamma(3)
+        return vhat * (1.0 - theta), alpha, size, k
+    return lap.cache.fetch("basis", "projection_rounding", build)
+
+
+def mass_sum_rounding(lap: Laplacian):
+    r"""``(row, vol)``: per vertex, bounds of the relative rounding of ``lap.mass`` (the row
+    sums of B, k terms each: :math:`\gamma_k (|B|1)_i / m_i`) and of
+    :meth:`~spectral_igl.laplacian.Laplacian.component_volume` (those row sums summed over the
+    :math:`n_c` vertices of the component: :math:`\gamma_{k + n_c}\,1_c^\top|B|1 / \hat V_c`)."""
+    absB = abs(lap.B).tocsr()
+    k = int(np.max(np.diff(absB.indptr))) if lap.n else 1
+    comp = lap.components
+    size = np.bincount(comp, minlength=lap.n_components)[comp]
+    rowabs = np.asarray(absB.sum(axis=1)).ravel()
+    absvol = np.bincount(comp, weights=rowabs, minlength=lap.n_components)[comp]
+    return gamma(k) * rowabs / lap.mass, gamma(k + size) * absvol / lap.component_volume()
+
+
+def projection_rounding(lap: Laplacian, y_abs: np.ndarray, with_mass: bool) -> np.ndarray:
+    r"""Entrywise bound of :math:`|Z\,\mathrm{fl}(Z^\top y) - P_0f|` as computed by
+    :meth:`~spectral_igl.laplacian.Laplacian.component_basis` (the projection onto the
+    constants of each component).
+
+    ``with_mass``: y = fl(Bf) and ``y_abs`` = :math:`|B||f|`; else y = g and ``y_abs`` = |g|.
+    With :math:`\hat z = z(1 + \alpha)` the computed basis, the products and the sum of the
+    :math:`n_c` terms of a component (Higham §3.1), and the k-term rows of Bf,
+
+    .. math:: |u_i - (P_0f)_i| \le \bigl((1 + \alpha)^2(1 + \gamma_1)(1 + \gamma_{n_c})
+              (1 + \gamma_k) - 1\bigr)\, \frac{1_c^\top|B||f|}{V_c}:
+
+    the allowance is scaled to the sum of the magnitudes of what cancels, not to the result.
+    """
+    vlow, alpha, size, k = _projection_constants(lap)
+    rel = (1.0 + alpha) ** 2 * (1.0 + gamma(1)) * (1.0 + gamma(size)) * (1.0 + gamma(k if with_mass else 0)) - 1.0
+    S = lap.component_sum(np.abs(y_abs))
+    if S.ndim == 2:
+        return (rel / vlow)[:, None] * S * (1.0 + 4 * EPS)
+    return rel / vlow * S * (1.0 + 4 * EPS)
+
+
+def abs_mass_apply(lap: Laplacian, f: np.ndarray) -> np.ndarray:
+    """:math:`|B||f|` (the magnitudes summed in each entry of Bf)."""
+    absB = lap.cache.fetch("basis", "abs_mass", lambda: abs(lap.B).tocsr())
+    return absB @ np.abs(f)
+
+
+def mass_rounding(lap: Laplacian, f: np.ndarray) -> np.ndarray:
+    r"""Entrywise bound of :math:`|\mathrm{fl}(Bf) - Bf| \le \gamma_k|B||f|` (k: the longest row)."""
+    return gamma(_projection_constants(lap)[3]) * abs_mass_apply(lap, f)
+
+
+def filter_sup(filt, a: float, b: float, target: float = 0.0):
+    r"""``(M, proved)``: a bound of :math:`\max_{[a, b]}|\varphi|`, proved
+    (:func:`certified_sup`, refined down to ``target``/1000) for the built-in filters,
+    sampled (:func:`sup_error`) otherwise."""
+    d2 = filter_d2(filt)
+    with np.errstate(all="ignore"):
+        if d2 is not None:
+            return certified_sup(lambda s: (filt(s), np.abs(filt(s))), d2, a, b, target, n=200), True
+        return sup_error(filt, a, b, n=500), False
+
+
 # ----------------------------------------------------------------------------- certified sup
 def sample_grid(a: float, b: float, n: int = 6000) -> np.ndarray:
     """Sorted sample points of [a, b]: linear, geometric from a (or from 1e-14 b) and Chebyshev."""

@@ -26,29 +26,67 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..linalg import mass_solve, shifted_factor
-from .common import EPS, cheb_adaptive, ellipse_tails, filter_logmax, tail_sums
+from .common import EPS, cheb_coeffs, ellipse_tails, filter_logmax, sample_grid, tail_sums
 
 
-def _cheb_steps(g, lo, hi, tol, max_steps, logmax=None):
-    """Smallest m with 2 * (Chebyshev tail of g beyond degree m-1) <= tol.
+def _cheb_fit(g, lo, hi, max_degree):
+    r"""Chebyshev coefficients of g on [lo, hi] and ``miss``, the largest deviation of their
+    series from g on :func:`.common.sample_grid` (linear, geometric and Chebyshev points)
+    and on points geometrically graded towards hi.
+
+    The degree doubles from 64 until the last eighth of the coefficients is at the rounding
+    level *and* the series matches g on the sample, or ``max_degree`` is reached. The
+    coefficients alone cannot see a feature narrower than the spacing of the Chebyshev
+    points (a bump near 0 of a wide spectrum: every sample ~0, a zero series, a zero
+    "tail"); the geometric points near both ends can.
+    """
+    xs = sample_grid(lo, hi, 400)
+    if hi > lo:     # geometric towards hi too (shift-invert maps s near 0 to y near hi)
+        xs = np.unique(np.concatenate([xs, hi - np.geomspace(1e-14 * (hi - lo), hi - lo, 400)]))
+        xs = xs[(xs >= lo) & (xs <= hi)]
+    with np.errstate(all="ignore"):
+        gx = np.asarray(g(xs))
+    top = float(np.max(np.abs(gx))) if np.all(np.isfinite(gx)) else np.inf
+    X = (2.0 * xs - (lo + hi)) / (hi - lo) if hi > lo else np.zeros_like(xs)
+    m = 64
+    while True:
+        c = cheb_coeffs(g, lo, hi, m)
+        scale = max(float(np.max(np.abs(c))), top)
+        tail = float(np.max(np.abs(c[-(m // 8):])))
+        miss = float(np.max(np.abs(np.polynomial.chebyshev.chebval(X, c) - gx)))
+        if not np.isfinite(miss):
+            miss = np.inf
+        if (tail <= 8 * EPS * scale and miss <= 64 * EPS * scale) or m >= max_degree:
+            return c, miss
+        m *= 2
+
+
+def _cheb_steps(g, lo, hi, tol, max_steps, logmax=None, steps=None):
+    """Smallest m with 2 * (Chebyshev tail of g beyond degree m-1) <= tol (or the given ``steps``).
 
     With ``logmax`` (log of a bound of |g| on the Bernstein ellipses of [lo, hi]) the tails
     are proved (:func:`.common.ellipse_tails`); when the proved tail does not reach ``tol``
     within ``max_steps``, or without ``logmax``, the sampled tail plus an aliasing allowance
-    is used (an estimate). Returns ``(m, bound, scale, proved)``.
+    and the sampled misfit of the series (:func:`_cheb_fit`) is used (an estimate). Returns
+    ``(m, bound, scale, proved)``.
     """
-    c, _ = cheb_adaptive(g, lo, hi, max_degree=max(128, 2 * max_steps))
+    c, miss = _cheb_fit(g, lo, hi, max(128, 2 * (max_steps if steps is None else max(int(steps), 2))))
     M = c.size - 1
     scale = float(np.max(np.abs(c)))
     if logmax is not None:
         bound = 2.0 * ellipse_tails(logmax, np.arange(1, M + 2) - 1.0)
+        if steps is not None and int(steps) <= M + 1 and np.isfinite(bound[int(steps) - 1]):
+            return int(steps), float(bound[int(steps) - 1]), scale, True
         ok = np.flatnonzero(bound[:max_steps] <= tol)
-        if ok.size:
+        if steps is None and ok.size:
             m = int(ok[0]) + 1
             return m, float(bound[m - 1]), scale, True
     alias = 2.0 * float(np.sum(np.abs(c[-(M // 8):])))
     tails = tail_sums(c)  # tails[m] = error of degree m-1 truncation
-    bound = 2.0 * (tails[1:] + alias)  # index m-1 -> m steps
+    bound = 2.0 * (tails[1:] + alias + miss)  # index m-1 -> m steps
+    if steps is not None:
+        m = int(steps)
+        return m, 2.0 * (float(tails[min(m, M + 1)]) + alias + miss), scale, False
     ok = np.flatnonzero(bound <= tol)
     m = int(ok[0]) + 1 if ok.size else min(M, max_steps)
     m = min(m, max_steps)
@@ -121,15 +159,7 @@ class KrylovPlan:
     def __init__(self, lap, filt, a, b, tol, steps=None, max_steps=3000, backend="auto"):
         self.lap, self.filt, self.a, self.b, self.backend = lap, filt, a, b, backend
         logmax = filter_logmax(filt, a, b)
-        self.proved = False
-        if steps is None:
-            m, err, scale, self.proved = _cheb_steps(filt, a, b, tol, max_steps, logmax)
-        else:
-            m = int(steps)
-            _, _, scale, _ = _cheb_steps(filt, a, b, 0.0, max(m, 2))
-            c, _ = cheb_adaptive(filt, a, b, max_degree=max(128, 2 * m))
-            M = c.size - 1
-            err = 2.0 * (tail_sums(c)[min(m, M + 1)] + 2.0 * float(np.sum(np.abs(c[-(M // 8):]))))
+        m, err, scale, self.proved = _cheb_steps(filt, a, b, tol, max_steps, logmax, steps)
         self.m = m
         self.scalar_error = err
         self.rounding = 64 * EPS * m * scale
@@ -163,15 +193,7 @@ class ShiftInvertPlan:
         for gam in cands:
             lo, hi = 1.0 / (1.0 + gam * b), 1.0 / (1.0 + gam * a)
             g = self._g(gam)
-            proved = False
-            if steps is None:
-                m, err, scale, proved = _cheb_steps(g, lo, hi, tol, max_steps, self._logmax(gam, lo, hi))
-            else:
-                m = int(steps)
-                c, _ = cheb_adaptive(g, lo, hi, max_degree=max(128, 2 * m))
-                M = c.size - 1
-                err = 2.0 * (tail_sums(c)[min(m, M + 1)] + 2.0 * float(np.sum(np.abs(c[-(M // 8):]))))
-                scale = float(np.max(np.abs(c)))
+            m, err, scale, proved = _cheb_steps(g, lo, hi, tol, max_steps, self._logmax(gam, lo, hi), steps)
             if best is None or (not proved, m, err) < (not best[4], best[0], best[1]):
                 best = (m, err, scale, gam, proved)
         self.m, self.scalar_error, scale, self.gamma, self.proved = best

@@ -28,7 +28,10 @@ of any single solve. Methods:
     :math:`\mathrm{diag}(XBX)` the complex-step derivative of
     :math:`\mathrm{diag}((L_g - zB)^{-1})` at z = 0 (one complex factorization). Error: :math:`|G_{ii} - \tilde G_{ii}| \le \varepsilon\,(B^{-1})_{ii}` with
     :math:`\varepsilon = \max|\varphi - r|` on the spectrum (reported as
-    ``abs_error_bound``), and the error is also measured at ``samples`` vertices.
+    ``abs_error_bound``), and the error is also measured at ``samples`` vertices. The exact
+    paths (and the circle rule of :math:`s^{-p}`, p >= 3) report an a-priori rounding
+    allowance instead, which grows with :math:`\lambda_{\max}/\lambda_{\min}^+`
+    (64 ε p (1 + κ) times the magnitudes of the terms summed, κ the spectrum's ratio).
 ``"probing"``
     Spectrum-free estimator: probing vectors built from a distance-``D`` colouring of
     the mesh graph (two vertices of one colour are more than ``D`` edges apart), so that
@@ -47,6 +50,7 @@ import numpy as np
 from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size, check_spectral_function
 from ..approx import LARGE_T, spectral_operator
 from ..approx import METHODS as ENGINE_METHODS
+from ..approx.common import gamma, mass_sum_rounding
 from ..filters import check_filter
 from ..laplacian import as_laplacian, lambda_max
 from ..linalg import lambda_min_positive, lambda_min_positive_kind
@@ -179,6 +183,13 @@ def heat_projection_applies(lap, filt) -> bool:
     return filt.kind == "heat" and filt.params["t"] * lambda_max(lap) > LARGE_T
 
 
+def _reciprocal_rounding(lap) -> np.ndarray:
+    r"""Per vertex, a bound of :math:`|\mathrm{fl}(1/\hat V_c) - 1/V_c|\,\hat V_c` (the heat's
+    limit 1/V_c at a large t, :math:`V_c = 1_c^\top B 1_c` exactly)."""
+    theta = np.minimum(mass_sum_rounding(lap)[1], 0.5)
+    return (theta / (1.0 - theta) + gamma(1)) * (1.0 + gamma(1))
+
+
 def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed,
               progress=None):
     n = lap.n
@@ -206,9 +217,12 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         minv = inverse_mass_diagonal(lap)
         vol = lap.component_volume()
         if decay * float(np.max(minv * vol)) <= tol:
-            diag, bound = 1.0 / vol, decay * minv
+            diag, bound = 1.0 / vol, decay * minv + _reciprocal_rounding(lap) / vol
             if delta == "seed":
-                diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
+                # m^2 / V: the row sums m_i of B rounded too, and two products
+                row = mass_sum_rounding(lap)[0]
+                grow = (1.0 + row) ** 2 * (1.0 + gamma(2)) - 1.0
+                diag, bound = diag * lap.mass ** 2, (bound * (1.0 + grow) + grow * diag) * lap.mass ** 2
             info.update(method="projection", abs_error_bound=float(bound.max(initial=0.0)),
                         bound_kind=lambda_min_positive_kind(lap))
             return diag, info
