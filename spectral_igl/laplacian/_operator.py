@@ -1,6 +1,7 @@
 """The :class:`Laplacian` pair (L, B) that every later stage takes."""
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -10,7 +11,7 @@ import scipy.sparse.csgraph as csgraph
 from .._validate import describe
 from .cache import Cache
 
-__all__ = ["Laplacian", "make_laplacian", "as_laplacian"]
+__all__ = ["Laplacian", "make_laplacian", "as_laplacian", "drop_negative_weights"]
 
 
 @dataclass(eq=False)
@@ -48,6 +49,8 @@ class Laplacian:
     components: np.ndarray = None
     n_components: int = 0
     cache: Cache = field(default_factory=Cache, repr=False)
+    _metzler: bool = field(default=None, init=False, repr=False)
+    _warned: bool = field(default=False, init=False, repr=False)
 
     @property
     def n(self) -> int:
@@ -63,6 +66,42 @@ class Laplacian:
     def mass(self) -> np.ndarray:
         """(n,) row sums of B: the lumped mass of each vertex."""
         return np.asarray(self.B.sum(axis=1)).ravel()
+
+    @property
+    def is_metzler(self) -> bool:
+        r"""True when :math:`-B^{-1}L` is a Metzler matrix: B diagonal and positive, and
+        every off-diagonal entry of L :math:`\le 0` (every edge weight non-negative).
+
+        Exactly then is :math:`e^{-tB^{-1}L}` entrywise non-negative for every
+        :math:`t \ge 0`, so that heat kernels, diffusion distances and heat kernel
+        signatures are non-negative (for an exactly computed kernel).
+        """
+        if self._metzler is None:
+            L = self.L
+            row = np.repeat(np.arange(self.n), np.diff(L.indptr))
+            off_ok = not np.any((L.data > 0) & (L.indices != row))
+            self._metzler = bool(off_ok and self.lumped and np.all(self.B.diagonal() > 0))
+        return self._metzler
+
+    def warn_if_not_metzler(self, what: str = "heat kernel", stacklevel: int = 3) -> None:
+        """Warn, once per Laplacian, that its ``what`` can be negative (see :attr:`is_metzler`).
+
+        Called where heat kernels and other kernels that are non-negative in the continuum
+        are evaluated; silent when :attr:`is_metzler` holds.
+        """
+        if self._warned or self.is_metzler:
+            return
+        self._warned = True
+        if not self.lumped:
+            why = "its mass matrix B is not diagonal"
+        else:
+            row = np.repeat(np.arange(self.n), np.diff(self.L.indptr))
+            k = int(np.count_nonzero((self.L.data > 0) & (self.L.indices != row))) // 2
+            why = f"{k} of its edge weights are negative (positive off-diagonal entries of L)"
+        warnings.warn(f"this Laplacian is not Metzler ({why}), so its {what} can take negative "
+                      "values; the defaults of sig.laplacian (weights='auto', mass='lumped') are "
+                      "Metzler on triangle and polygon meshes, and positive=True makes any lumped "
+                      "Laplacian Metzler", RuntimeWarning, stacklevel=stacklevel)
 
     def component_basis(self) -> sp.csr_matrix:
         r"""(n, c) sparse basis of ker L: one B-normalised indicator per component.
@@ -103,7 +142,7 @@ class Laplacian:
     def __repr__(self) -> str:
         return (
             f"Laplacian(domain={self.domain!r}, n={self.n}, nnz(L)={self.L.nnz}, "
-            f"components={self.n_components}, lumped={self.lumped})"
+            f"components={self.n_components}, lumped={self.lumped}, metzler={self.is_metzler})"
         )
 
 
@@ -113,6 +152,21 @@ def as_laplacian(lap, name: str = "lap") -> Laplacian:
         raise TypeError(f"{name} must be a spectral_igl.Laplacian (from sig.laplacian(V, F) or "
                         f"another constructor), got {describe(lap)}")
     return lap
+
+
+def drop_negative_weights(L: sp.spmatrix) -> tuple[sp.csr_matrix, int]:
+    """``L`` with its positive off-diagonal entries (negative edge weights) set to 0.
+
+    Returns ``(L, k)``, ``k`` the number of entries changed. The diagonal is left as it is:
+    :func:`make_laplacian` resets it so that every row sums to 0, which keeps the result
+    positive semi-definite (it is a sum of non-negative edge terms).
+    """
+    L = sp.csr_matrix(L, dtype=np.float64, copy=True)
+    row = np.repeat(np.arange(L.shape[0]), np.diff(L.indptr))
+    bad = (L.data > 0) & (L.indices != row)
+    L.data[bad] = 0.0
+    L.eliminate_zeros()
+    return L, int(np.count_nonzero(bad))
 
 
 def _symmetrize(A: sp.spmatrix) -> sp.csr_matrix:

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from .._validate import describe
 
 __all__ = ["intrinsic_delaunay", "intrinsic_cotan_stiffness", "edge_lengths", "mollify", "corner_cotangents",
-           "element_sum", "normalized_gradient_divergence"]
+           "element_sum", "normalized_gradient_divergence", "boundary_vertices", "cotan_elements"]
 
 #: intrinsic mollification of the Laplacian's edge lengths, relative to their mean: only
 #: triangles thinner than about 1 : 10⁴ (which edge lengths resolve poorly) change it
@@ -21,8 +21,11 @@ def intrinsic_delaunay(l, F):
     Every interior manifold edge whose two opposite angles sum to more than :math:`\pi`
     (:math:`\cot\alpha + \cot\beta < 0`) is flipped, the new diagonal's length coming from
     the unfolded quad, until none is left (Fisher et al. 2007). The cotangent weights of the
-    result are non-negative and its cotangent Laplacian is unique. Compiled in the package's
-    extension; libigl's ``intrinsic_delaunay_triangulation`` where that is not built.
+    result are non-negative on interior edges and its cotangent Laplacian is unique.
+    Boundary edges (one triangle) and non-manifold edges (three or more) are never flipped:
+    each sheet meeting at a non-manifold edge is made Delaunay on its own, with that edge as
+    its boundary. Compiled in the package's extension; libigl's
+    ``intrinsic_delaunay_triangulation`` (edge-manifold meshes only) where that is not built.
 
     Parameters
     ----------
@@ -96,14 +99,15 @@ def corner_cotangents(l, area=None) -> np.ndarray:
     return num / (4.0 * np.maximum(area, np.finfo(float).tiny))[:, None]
 
 
-def intrinsic_cotan_stiffness(V, F, n: int | None = None) -> sp.csr_matrix:
+def intrinsic_cotan_stiffness(V, F, n: int | None = None, mirror: bool = False) -> sp.csr_matrix:
     r"""Positive semi-definite cotangent stiffness of the intrinsic Delaunay triangulation of (V, F).
 
     .. math:: S_{jk} = -\tfrac12(\cot\alpha_{jk} + \cot\beta_{jk}), \qquad S_{jj} = -\sum_{k\ne j} S_{jk}
 
     on the edges of the triangulation :func:`intrinsic_delaunay` finds for the mesh's edge
-    lengths (Bobenko and Springborn 2007): every weight is non-negative on edge-manifold
-    meshes, and the flips always stop. An edge the flips turn into a loop from a vertex to
+    lengths (Bobenko and Springborn 2007): every interior edge's weight is non-negative (a
+    boundary or non-manifold edge, which no flip reaches, keeps its cotan weight), and the
+    flips always stop. An edge the flips turn into a loop from a vertex to
     itself (possible in an intrinsic triangulation) adds nothing. Triangles thinner than
     edge lengths resolve are first mollified (:func:`mollify`, factor
     :data:`LAPLACIAN_MOLLIFY`; a warning says by how much); other meshes are untouched.
@@ -114,6 +118,17 @@ def intrinsic_cotan_stiffness(V, F, n: int | None = None) -> sp.csr_matrix:
     F : (m, 3) int
     n : int, optional
         Size of the result (default ``len(V)``).
+    mirror : bool
+        Make the boundary edges Delaunay too, in the *double* of the surface: the
+        triangulation glued to its mirror copy along the boundary edges (the copy of an
+        interior vertex is a new vertex, a boundary vertex is its own copy), flipped until
+        intrinsically Delaunay, its stiffness then folded back (a vertex and its copy
+        summed) and halved. This is the Galerkin stiffness of the functions that are even
+        under the reflection, which is the Neumann problem, on the same vertices: a boundary
+        edge facing an obtuse angle is flipped into an edge from that angle's vertex to its
+        own copy, which adds nothing. Weights left negative by edges that are still not
+        flippable (non-manifold edges, edges from boundary vertex to boundary vertex through
+        the interior) are rare. No effect on a mesh without boundary.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -126,14 +141,35 @@ def intrinsic_cotan_stiffness(V, F, n: int | None = None) -> sp.csr_matrix:
                       f"({delta / float(l.mean() - delta):.2g} of the mean) before the intrinsic Delaunay flips",
                       RuntimeWarning, stacklevel=4)
     l, Fi = intrinsic_delaunay(l, F)
+    on_boundary = boundary_vertices(Fi, n) if mirror else None
+    if on_boundary is None or not on_boundary.any():
+        return cotan_elements(l, Fi, n)
+    copy = np.where(on_boundary, np.arange(n), np.arange(n, 2 * n))
+    l2, F2 = intrinsic_delaunay(np.r_[l, l[:, ::-1]], np.r_[Fi, copy[Fi][:, ::-1]])
+    fold = sp.vstack([sp.identity(n, format="csr"), sp.identity(n, format="csr")]).tocsr()
+    return (0.5 * (fold.T @ cotan_elements(l2, F2, 2 * n) @ fold)).tocsr()
+
+
+def boundary_vertices(F, n: int) -> np.ndarray:
+    """(n,) bool: the vertices of the edges that one triangle of ``F`` has alone."""
+    e = np.sort(np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]]), axis=1)
+    pairs, count = np.unique(e, axis=0, return_counts=True)
+    out = np.zeros(n, dtype=bool)
+    out[pairs[count == 1].ravel()] = True
+    return out
+
+
+def cotan_elements(l, F, n: int) -> sp.csr_matrix:
+    """(n, n) cotangent stiffness of the triangles ``F`` with edge lengths ``l`` (``l[f, i]``
+    opposite corner i): :func:`element_sum` of the per-triangle matrices."""
     h = 0.5 * corner_cotangents(l)              # half the cotangent of the corner opposite each edge
-    W = np.zeros((len(Fi), 3, 3))
+    W = np.zeros((len(F), 3, 3))
     for i in range(3):
         j, k = (i + 1) % 3, (i + 2) % 3
         W[:, j, k] = W[:, k, j] = -h[:, i]
         W[:, j, j] += h[:, i]
         W[:, k, k] += h[:, i]
-    return element_sum(W, Fi, n)
+    return element_sum(W, F, n)
 
 
 def element_sum(W, F, n: int) -> sp.csr_matrix:

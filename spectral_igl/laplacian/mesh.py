@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._validate import as_cells, as_mesh_arrays, as_points, check_tets_have_volume
-from ._operator import Laplacian, make_laplacian
+from ._operator import Laplacian, drop_negative_weights, make_laplacian
 
 __all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "square", "mass_matrix", "full_mass",
            "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness",
@@ -97,12 +97,6 @@ def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
-def _edge_manifold(F: np.ndarray) -> bool:
-    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(e, axis=0, return_counts=True)
-    return bool(counts.max() <= 2)
-
-
 def square(A: sp.spmatrix, n: int) -> sp.csr_matrix:
     """``A`` padded with zero rows and columns to (n, n).
 
@@ -141,10 +135,12 @@ def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
                          shape=(n, n))
 
 
-def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.csr_matrix:
+def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan", mirror: bool = False) -> sp.csr_matrix:
     """Positive semi-definite stiffness of a clean mesh: the one place libigl's sign flips.
 
     libigl's ``cotmatrix`` is negative semi-definite; this returns ``-cotmatrix``.
+    ``mirror``: intrinsic Delaunay weights only, flip boundary edges in the mesh's double
+    (see :func:`~spectral_igl.laplacian.intrinsic.intrinsic_cotan_stiffness`).
     """
     import igl
 
@@ -155,7 +151,7 @@ def cotan_stiffness(V: np.ndarray, C: np.ndarray, weights: str = "cotan") -> sp.
             raise ValueError("weights='intrinsic_delaunay' is defined for triangle meshes only")
         from .intrinsic import intrinsic_cotan_stiffness
 
-        return intrinsic_cotan_stiffness(V, C)
+        return intrinsic_cotan_stiffness(V, C, mirror=mirror)
     if weights == "mean_value":
         if C.shape[1] != 3:
             raise ValueError("weights='mean_value' is defined for triangle meshes only")
@@ -253,7 +249,8 @@ def _element_kind(V, F, elements: str):
     return ("cells", F)
 
 
-def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: str = "auto") -> Laplacian:
+def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: str = "auto",
+              positive: bool | None = None) -> Laplacian:
     r"""Laplacian of a triangle mesh ``(V, F)``, tetrahedral mesh ``(V, T)`` or polygon mesh.
 
     Parameters
@@ -279,13 +276,14 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         lumped row sums; ``weights`` must be ``"cotan"`` or ``"auto"``). On triangles it equals the
         cotan Laplacian.
     weights : {"auto", "cotan", "intrinsic_delaunay", "uniform", "mean_value"}
-        ``"auto"`` (default): ``"intrinsic_delaunay"`` for triangles (``"cotan"`` where an
-        edge is non-manifold), ``"cotan"`` for tets and polygons.
+        ``"auto"`` (default): ``"intrinsic_delaunay"`` with ``positive=True`` for triangles,
+        ``"cotan"`` for tets and polygons (see ``positive``).
         ``"cotan"``: linear FEM stiffness (libigl ``cotmatrix``), triangles and tets.
         ``"intrinsic_delaunay"``: cotan weights of the intrinsic Delaunay triangulation
-        (Bobenko--Springborn), non-negative off the diagonal; triangles only. On a mesh
-        with non-manifold edges, where edge flips are undefined, it falls back to
-        ``"cotan"`` with a warning. ``"uniform"``: graph Laplacian, unit edge weights.
+        (Bobenko--Springborn); triangles only. Its weights are non-negative on interior
+        edges; an edge with a single triangle (boundary) or more than two (non-manifold)
+        cannot be flipped and keeps its cotan weight, negative where its opposite angles
+        sum to more than :math:`\pi`. ``"uniform"``: graph Laplacian, unit edge weights.
         ``"mean_value"``: Floater's mean-value weights (triangles only,
         :func:`mean_value_weights`), positive for every triangle shape. They are not
         symmetric (:math:`w_{ij}` uses the angles at :math:`x_i`); the survey lists them as
@@ -299,6 +297,25 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         al. 2003) for triangles, the barycentric mass for tets. ``"full"``: consistent
         linear-FEM mass. ``"barycentric"``: a third (a quarter) of each incident element's
         measure, the row sums of the full mass.
+    positive : bool or None
+        Make every edge weight non-negative (every off-diagonal entry of L <= 0): with a
+        diagonal ``mass``, :math:`-B^{-1}L` is then Metzler and heat kernels are
+        non-negative. With ``"intrinsic_delaunay"`` the boundary edges, which no flip of
+        the mesh reaches, are first flipped in the mesh's mirror double (the Neumann
+        reflection; ``mirror`` of
+        :func:`~spectral_igl.laplacian.intrinsic.intrinsic_cotan_stiffness`), which keeps
+        the accuracy of intrinsic Delaunay; then, for any ``weights``, the weights still
+        negative are set to 0 (the diagonal follows, so rows still sum to 0).
+        ``lap.data["clamped"]`` counts them. ``None`` (default): ``True`` for
+        ``weights="auto"`` on triangles, ``False`` otherwise. Measured
+        (``benchmarks/positivity.py``, jittered Neumann unit square with obtuse angles on
+        the boundary, first 12 eigenvalues): 1.97e-3 -> 5.36e-4 from 4,225 to 16,641
+        vertices against 1.96e-3 -> 5.34e-4 without ``positive``, where setting the
+        boundary weights to 0 without the mirror flips gives first-order 5.5e-3 -> 2.7e-3.
+        On tets and polygons no flips apply and the negative weights are interior: setting
+        them to 0 makes the operator inconsistent (jittered unit cube: eigenvalues 40% off
+        and not converging; jittered quads 2.2% against 0.23% at 4,225 vertices), so there
+        ``positive=True`` trades accuracy for non-negative heat and is not the default.
 
     Returns
     -------
@@ -308,18 +325,22 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
 
     Notes
     -----
-    The defaults preserve positivity on triangle meshes: intrinsic-Delaunay cotan weights
-    are non-negative and the lumped mass is diagonal, so :math:`-B^{-1}L` is a Metzler
-    matrix and :math:`e^{-t\tilde L}` maps non-negative data to non-negative data (the heat
-    kernel, diffusion distances and HKS are non-negative). On the unit sphere the heat
-    kernel at t = 0.05 converges in the max norm at rate 2.0 with these defaults against
-    1.6 with ``mass="full"`` (errors 5.1e-3 and 4.3e-3 at 10242 vertices), and the first 25
+    The defaults preserve positivity on triangle meshes, with or without boundary,
+    manifold or not: intrinsic-Delaunay cotan weights (see ``positive``) are non-negative
+    and the lumped mass is diagonal, so :math:`-B^{-1}L` is a Metzler matrix and
+    :math:`e^{-t\tilde L}` maps non-negative data to non-negative data (the heat kernel,
+    diffusion distances and HKS are non-negative). On the unit sphere the heat kernel at
+    t = 0.05 converges in the max norm at rate 2.0 with these defaults against 1.6 with
+    ``mass="full"`` (errors 5.1e-3 and 4.3e-3 at 10242 vertices), and the first 25
     eigenvalues are closer (0.13 against 0.16 at 2562 vertices); cotan with the full mass
     gives heat kernels whose minimum is -0.1% to -3% of the peak on real meshes at t = 1e-3
-    (unit area), -5% to -13% on icospheres at t = 1e-4 (``benchmarks/positivity.py``). Cotan weights of
-    tetrahedra can be positive off the diagonal (obtuse dihedral angles), so positivity is
-    not guaranteed there. ``lap.data["positivity"]`` says whether this Laplacian has it
-    (L's off-diagonal entries all <= 0 and B diagonal).
+    (unit area), -5% to -13% on icospheres at t = 1e-4 (``benchmarks/positivity.py``).
+    Cotan weights of tetrahedra and polygon Laplacians can be positive off the diagonal
+    (obtuse dihedral and fan angles), so positivity is not guaranteed there by default
+    (see ``positive``).
+    ``lap.data["positivity"]`` and ``lap.is_metzler`` say whether this Laplacian has it
+    (L's off-diagonal entries all <= 0 and B diagonal); where it has not, heat kernels
+    warn once (:meth:`~spectral_igl.laplacian.Laplacian.warn_if_not_metzler`).
 
     Real data is handled rather than rejected. Several components, boundaries (natural
     Neumann conditions) and non-manifold edges need nothing special. Degenerate
@@ -343,6 +364,8 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         raise ValueError(f"mass must be one of {MASSES[:2] + MASSES[3:]}, got {mass!r}")
     if elements not in _ELEMENTS:
         raise ValueError(f"elements must be one of {_ELEMENTS}, got {elements!r}")
+    if positive is not None and not isinstance(positive, (bool, np.bool_)):
+        raise TypeError(f"positive must be a bool or None, got {type(positive).__name__}")
     if F is None:
         V, F = as_mesh_arrays(V, F)
     F = _element_kind(V, F, elements)
@@ -354,7 +377,8 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         Vp = as_points(V, "V", dims=(2, 3))
         if Vp.shape[1] == 2:
             Vp = np.c_[Vp, np.zeros(len(Vp))]
-        return polygon_laplacian(Vp, F[1], mass="full" if mass == "full" else "lumped")
+        return polygon_laplacian(Vp, F[1], mass="full" if mass == "full" else "lumped",
+                                 positive=bool(positive))
     if elements == "tet" and np.shape(F[1])[1:] != (4,):
         raise ValueError(f"elements='tet' needs an (m, 4) array, got shape {np.shape(F[1])}")
     if elements == "triangle" and np.shape(F[1])[1:] != (3,):
@@ -364,13 +388,14 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
     if dropped:
         warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
                       RuntimeWarning, stacklevel=2)
+    if positive is None:
+        positive = weights == "auto" and C.shape[1] == 3
     if weights == "auto":
-        weights = "cotan" if (C.shape[1] == 4 or not _edge_manifold(C)) else "intrinsic_delaunay"
-    if weights == "intrinsic_delaunay" and C.shape[1] == 3 and not _edge_manifold(C):
-        warnings.warn("mesh has non-manifold edges; intrinsic Delaunay flips are undefined there, "
-                      "using weights='cotan'", RuntimeWarning, stacklevel=2)
-        weights = "cotan"
-    L = square(cotan_stiffness(V, C, weights), n)
+        weights = "cotan" if C.shape[1] == 4 else "intrinsic_delaunay"
+    L = square(cotan_stiffness(V, C, weights, mirror=bool(positive)), n)
+    clamped = 0
+    if positive:
+        L, clamped = drop_negative_weights(L)
     B = square(mass_matrix(V, C, mass, meas), n)
     referenced = np.zeros(n, dtype=bool)
     referenced[C.ravel()] = True
@@ -382,8 +407,8 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     domain = "triangle" if C.shape[1] == 3 else "tet"
     key = "F" if domain == "triangle" else "T"
-    off = L - sp.diags(L.diagonal())
-    positivity = bool((off.data <= 0).all() and B.nnz <= n and (B.diagonal() > 0).all())
     data = {"V": V, key: C, "weights": weights, "mass": mass, "referenced": referenced,
-            "positivity": positivity}
-    return make_laplacian(L, B, domain=domain, data=data, adjacency=star_adjacency(n, C))
+            "positive": bool(positive), "clamped": (clamped + 1) // 2}
+    lap = make_laplacian(L, B, domain=domain, data=data, adjacency=star_adjacency(n, C))
+    lap.data["positivity"] = lap.is_metzler
+    return lap

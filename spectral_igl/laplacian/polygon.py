@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._validate import as_points, describe
-from ._operator import Laplacian, make_laplacian
+from ._operator import Laplacian, drop_negative_weights, make_laplacian
 
 __all__ = ["polygon_laplacian", "as_polygons", "virtual_vertices"]
 
@@ -99,7 +99,7 @@ def virtual_vertices(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.einsum("mk,mki->mi", W, X), W
 
 
-def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
+def polygon_laplacian(V, faces, mass: str = "full", positive: bool = False) -> Laplacian:
     r"""Laplacian of a polygon mesh ("Polygon Laplacian Made Simple", Bunge et al. 2020).
 
     Each polygon gets a virtual vertex :math:`c_f = \sum_i w_{fi} x_i` (the minimiser of
@@ -124,12 +124,19 @@ def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
     mass : {"full", "lumped"}
         ``"full"``: :math:`P^\top M P`. ``"lumped"``: its row sums on the diagonal (each
         vertex's share of the refined areas), as in Bunge et al.
+    positive : bool
+        Set the positive off-diagonal entries of :math:`L` (negative edge weights, from
+        obtuse angles of the refined fans) to 0, the diagonal following so that rows sum
+        to 0: with ``mass="lumped"``, :math:`-B^{-1}L` is then Metzler and heat kernels
+        are non-negative (:func:`spectral_igl.laplacian.mesh.laplacian`'s default).
 
     Returns
     -------
     Laplacian
         ``domain="polygon"``; ``data`` holds ``V``, ``faces`` (the list of per-degree
-        arrays), the virtual vertices ``C`` and the prolongation ``P``.
+        arrays), the virtual vertices ``C``, the prolongation ``P``, ``positive``,
+        ``clamped`` (the number of edge weights set to 0) and ``positivity``
+        (:attr:`~spectral_igl.laplacian.Laplacian.is_metzler`).
 
     Notes
     -----
@@ -152,6 +159,8 @@ def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
     n = V.shape[0]
     if mass not in _MASSES:
         raise ValueError(f"mass must be one of {_MASSES}, got {mass!r}")
+    if not isinstance(positive, (bool, np.bool_)):
+        raise TypeError(f"positive must be a bool, got {type(positive).__name__}")
     groups = as_polygons(faces, n, "faces")
     Cs, tris, prow, pcol, pval, kept = [], [], [], [], [], []
     dropped = 0
@@ -190,6 +199,9 @@ def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
     S = cotan_stiffness(Vr, T)
     M = full_mass(Vr, T)
     L = (P.T @ S @ P).tocsr()
+    clamped = 0
+    if positive:
+        L, clamped = drop_negative_weights(L)
     B = (P.T @ M @ P).tocsr()
     if mass == "lumped":
         B = sp.diags(np.asarray(B.sum(axis=1)).ravel()).tocsr()
@@ -206,5 +218,7 @@ def polygon_laplacian(V, faces, mass: str = "full") -> Laplacian:
                          (np.concatenate([np.repeat(F[:, 0], F.shape[1]) for F in kept]),
                           np.concatenate([F.ravel() for F in kept]))), shape=(n, n))
     data = {"V": V, "faces": kept, "C": np.vstack(Cs), "P": P, "mass": mass,
-            "referenced": referenced}
-    return make_laplacian(L, B, domain="polygon", data=data, adjacency=adj)
+            "referenced": referenced, "positive": bool(positive), "clamped": (clamped + 1) // 2}
+    lap = make_laplacian(L, B, domain="polygon", data=data, adjacency=adj)
+    lap.data["positivity"] = lap.is_metzler
+    return lap
