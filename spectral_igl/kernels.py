@@ -22,7 +22,7 @@ from .approx import spectral_operator
 from .approx.uniformization import metzler_heat, products_needed
 from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
-from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, metzler
+from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio
 
 __all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
            "block_sources", "MANY_SOURCES"]
@@ -95,7 +95,7 @@ def _column_info(lap, filt, K, bnorm, kind, method, tol):
         return K, make_info(np.full(K.shape, np.nan), None, method, tol=tol, bnorm_error=bnorm)
     err = entry_error(lap, bnorm)
     kind = weakest(kind, lambda_max_kind(lap))
-    if filt.kind == "heat" and metzler(lap):
+    if filt.kind == "heat" and lap.is_metzler:
         K = np.maximum(K, 0.0)
     return K, make_info(err, kind, method, tol=tol, bnorm_error=bnorm)
 
@@ -132,7 +132,7 @@ def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
     want = float(np.min(0.5 * allowed[bad] / np.maximum(norms[bad], np.finfo(float).tiny)))
     if method == "auto" and want >= TIGHTEST:
         return _entrywise(lap, filt, idx, delta, method, want, rtol, floor)
-    if method == "auto" and filt.kind == "heat" and delta == "mass" and metzler(lap):
+    if method == "auto" and filt.kind == "heat" and delta == "mass" and lap.is_metzler:
         t = filt.params["t"]
         # truncation well below rtol * floor * peak, with peak >= 1 / area (heat is conserved)
         # and max G = 1 / m_i
@@ -166,6 +166,8 @@ def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
 
 def _kernel(lap, filt, sources, delta, method, tol, return_info, rtol, floor):
     idx, scalar = source_indices(sources, lap.n)
+    if filt.kind == "heat":
+        lap.warn_if_not_metzler("heat kernel", stacklevel=4)
     return_info = as_flag(return_info, "return_info")
     if rtol is not None:
         rtol = as_tol(rtol, "rtol")
@@ -266,7 +268,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     .. math:: K_t(:, i) = e^{-t \tilde L} B^{-1} e_i = \sum_l e^{-t\lambda_l} x_l(i)\, x_l
 
     ``t`` is physical time (no normalisation). On a Metzler operator (lumped mass and
-    non-negative weights: :func:`spectral_igl.laplacian.metzler`) the exact kernel is non-negative and
+    non-negative weights: :attr:`Laplacian.is_metzler`) the exact kernel is non-negative and
     so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
     source, (n, m) for m sources.
 
@@ -287,6 +289,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     delta = as_delta(delta)
     idx, scalar = source_indices(sources, lap.n)
     if rtol is None and block_sources(lap, method, delta, idx.size):
+        lap.warn_if_not_metzler("heat kernel")
         K, info = heat_kernels(lap, [t], idx, tol=tol, return_info=True)
         K, info = K[:, :, 0], {k: (v[..., 0] if isinstance(v, np.ndarray) and v.ndim == 3 else v)
                                for k, v in info.items()}
@@ -354,13 +357,14 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     ((162, 2, 2), True)
     """
     lap = as_laplacian(lap)
+    lap.warn_if_not_metzler("heat kernel")
     return_bound = as_flag(return_bound, "return_bound")
     return_info = as_flag(return_info, "return_info")
     tol = as_tol(tol)
     idx, scalar = source_indices(sources, lap.n)
     K, eps = heat_columns(lap, times, idx, tol=tol)
     warn_missed("heat_kernels", eps, tol)
-    if metzler(lap):           # the exact kernel is non-negative: clipping only gets closer
+    if lap.is_metzler:         # the exact kernel is non-negative: clipping only gets closer
         np.maximum(K, 0.0, out=K)
     out = (K,)
     if return_bound:

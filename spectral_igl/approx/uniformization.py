@@ -39,7 +39,6 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..laplacian import metzler
 
 __all__ = ["metzler_heat", "products_needed", "STEP", "TAIL"]
 
@@ -106,7 +105,7 @@ def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
     Parameters
     ----------
     lap : Laplacian
-        Lumped mass and non-positive off-diagonal stiffness (:func:`spectral_igl.laplacian.metzler`).
+        Lumped mass and non-positive off-diagonal stiffness (:attr:`~spectral_igl.Laplacian.is_metzler`).
     t : float
     G : (n,) or (n, m) float, non-negative
         E.g. the discrete deltas :math:`B^{-1}e_i`.
@@ -119,7 +118,7 @@ def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
     abs_error : same shape as G
         :math:`|U - e^{-t\tilde L}G| \le` ``abs_error`` entry by entry: a proof (module notes).
     """
-    if not metzler(lap):
+    if not lap.is_metzler:
         raise ValueError("metzler_heat needs a lumped mass and non-positive off-diagonal stiffness")
     G = np.asarray(G, dtype=float)
     if np.any(G < 0) or not np.all(np.isfinite(G)):

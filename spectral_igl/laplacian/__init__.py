@@ -5,7 +5,7 @@ factorization.
 """
 from ._operator import Laplacian, as_laplacian, make_laplacian
 from .anisotropic import anisotropic_laplacian
-from .bounds import entry_error, lambda_max, lambda_max_kind, mass_ratio, metzler
+from .bounds import entry_error, lambda_max, lambda_max_kind, mass_ratio
 from .cache import Cache
 from .graph import graph_laplacian
 from .mesh import laplacian
@@ -17,5 +17,5 @@ from .voxels import voxel_laplacian
 __all__ = ["Laplacian", "Cache", "make_laplacian", "as_laplacian", "laplacian",
            "point_cloud_laplacian", "anisotropic_laplacian", "voxel_laplacian",
            "graph_laplacian", "tetrahedralize", "lambda_max", "lambda_max_kind", "mass_ratio",
-           "entry_error", "metzler",
+           "entry_error",
            "polygon_laplacian"]

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ._operator import Laplacian, as_laplacian
 
-__all__ = ["mass_ratio", "lambda_max", "lambda_max_kind", "entry_error", "metzler"]
+__all__ = ["mass_ratio", "lambda_max", "lambda_max_kind", "entry_error"]
 
 
 def mass_ratio(lap: Laplacian) -> float:
@@ -117,18 +117,3 @@ def entry_error(lap: Laplacian, bnorm_error) -> np.ndarray:
     w = w * (1.0 + 4.0 * np.finfo(float).eps)
     return w * b if b.ndim == 0 else w[:, None] * b[None, :]
 
-
-def metzler(lap: Laplacian) -> bool:
-    r"""Whether :math:`-B^{-1}L` is a Metzler matrix: B diagonal and every off-diagonal entry of
-    L non-positive. Then :math:`e^{-t\tilde L}` is entrywise non-negative at every t, so is
-    the heat kernel, and every partial sum of its uniformization series is too."""
-    lap = as_laplacian(lap)
-
-    def build():
-        if not lap.lumped:
-            return False
-        L = sp.coo_matrix(lap.L)
-        off = L.row != L.col
-        return bool(not np.any(L.data[off] > 0))
-
-    return lap.cache.fetch("bound", "metzler", build)
