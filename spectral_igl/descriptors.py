@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import accuracy
+from .accuracy import info as bound_info, weakest
 from ._validate import as_array, as_flag, as_int, as_positive, as_real_in, describe
 from .diagonal import kernel_diagonal
 from .diagonal.multiscale import family_diagonals, heat_diagonals
@@ -44,11 +44,11 @@ def _joined(methods):
 def _stacked(infos, scalar, **extra):
     """The ``info`` of diagonals computed one scale at a time: per-entry bounds side by side."""
     err = np.stack([np.asarray(i["abs_error"], dtype=float) for i in infos], axis=1)
-    out = accuracy.info(err[:, 0] if scalar else err, accuracy.weakest(*[i["bound_kind"] for i in infos]),
+    out = bound_info(err[:, 0] if scalar else err, weakest(*[i["bound_kind"] for i in infos]),
                         _joined(i["method"] for i in infos), **extra)
-    notes = [i["note"] for i in infos if "note" in i]
+    notes = [i["note"] for i in infos if i.get("note")]
     if notes:
-        out["note"] = notes[0]
+        out["note"] = "; ".join(dict.fromkeys(notes))
     return out
 
 
@@ -125,7 +125,7 @@ def hks(lap, times, method: str = "auto", progress=None, return_info: bool = Fal
             md = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8))
             out = md.values.copy()
             bar.update(T.size)
-        info = accuracy.info(md.abs_bound, accuracy.weakest(md.bound_kind, lambda_max_kind(lap)), "selinv",
+        info = bound_info(md.abs_bound, weakest(md.bound_kind, lambda_max_kind(lap)), "selinv",
                              eps=md.eps.copy(), factorizations=md.n_factorizations)
         return (out, info) if return_info else out
     cols, infos = [], []
@@ -294,7 +294,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         # normalised by its largest weight per energy: the ratio is unchanged, nothing underflows
         Psi = np.exp(z - z.max(axis=0))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
-        info = accuracy.info(np.full(out.shape, np.nan), None, "eigen", k=k,
+        info = bound_info(np.full(out.shape, np.nan), None, "eigen", k=k,
                              note="truncated eigen-expansion (Aubry et al.'s definition) from eigenpairs "
                                   "that are not certified: no error bound")
     else:
@@ -309,7 +309,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         for k, f in enumerate(filts):
             if md is not None:
                 d, derr = md.values[:, k], md.abs_bound[:, k]
-                kinds.append(accuracy.weakest(md.bound_kind, lambda_max_kind(lap)))
+                kinds.append(weakest(md.bound_kind, lambda_max_kind(lap)))
                 methods.append("selinv")
             else:
                 d, dinfo = kernel_diagonal(lap, f, method=method, progress=progress, return_info=True, **kwargs)
@@ -329,10 +329,9 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
             bar.update()
         bar.close()
         out = np.stack(cols, axis=1)
-        info = accuracy.info(np.stack(errs, axis=1), accuracy.weakest(*kinds), _joined(methods))
-        notes = [x for x in notes if x]
-        if notes:
-            info["note"] = notes[0]
+        info = bound_info(np.stack(errs, axis=1), weakest(*kinds), _joined(methods))
+        if any(notes):
+            info["note"] = "; ".join(dict.fromkeys(x for x in notes if x))
     if E.ndim == 0:
         out, info["abs_error"] = out[:, 0], info["abs_error"][:, 0]
     return (out, info) if return_info else out
@@ -368,7 +367,7 @@ def auto_diffusion_function(lap, t, method: str = "auto", return_info: bool = Fa
     if not return_info:
         return out
     info["abs_error"] = info["abs_error"] * area * (1.0 + 2.0 * EPS) + EPS * np.abs(out)
-    info.update(bound_kind=accuracy.weakest(info["bound_kind"], "estimate"), lambda2=lam2,
+    info.update(bound_kind=weakest(info["bound_kind"], "estimate"), lambda2=lam2,
                 note="the time unit 1/lambda_2 comes from a Lanczos eigenvalue (not certified); the "
                      "bound is that of the heat diagonal at the computed time, times the area")
     return out, info

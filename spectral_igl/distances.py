@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-from . import accuracy
+from .accuracy import info as bound_info, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
 from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
@@ -78,7 +78,7 @@ def root_error(d, d2_error):
     Examples
     --------
     >>> root_error([0.0, 2.0], 1e-4)
-    array([0.01 , 0.00005])
+    array([1.e-02, 5.e-05])
     """
     d = np.abs(np.asarray(d, dtype=float))
     e = np.asarray(d2_error, dtype=float)
@@ -212,7 +212,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         as_indices(targets, n, "targets")
     if diagonal == "eigen":
         d = _eigen_distance(lap, filt, s, k, delta)
-        info = accuracy.info(np.full(n, np.nan), None, "eigen", k=k,
+        info = bound_info(np.full(n, np.nan), None, "eigen", k=k,
                              note="truncated eigen-expansion: no error bound")
         return _finish(d, info, targets, n, return_info)
 
@@ -221,7 +221,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         if not (t.size > MANY_TARGETS and n > EXACT_MAX):
             op = spectral_operator(lap, filt, method, tol)
             d2, bound = _pair_norms(lap, op, s, t, delta)
-            info = accuracy.info(bound, accuracy.weakest(op.bound_kind, lambda_max_kind(lap)), op.method,
+            info = bound_info(bound, weakest(op.bound_kind, lambda_max_kind(lap)), op.method,
                                  tol=tol, engine_method=op.method)
             return _finish(np.sqrt(d2), info, np.arange(t.size) if np.ndim(targets) else 0, t.size,
                            return_info)
@@ -258,7 +258,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         # estimate) at j and s, and the column's per-entry bound
         derr = np.asarray(dinfo["abs_error"], dtype=float)
         err = derr + derr[s] + 2.0 * column_entry_error(lap, col_bound, delta)
-        kind = accuracy.weakest(dinfo["bound_kind"], op2.bound_kind, lambda_max_kind(lap))
+        kind = weakest(dinfo["bound_kind"], op2.bound_kind, lambda_max_kind(lap))
         info["engine_method"] = op2.method
     d2 = diag[s] + diag - 2.0 * col
     d2[s] = 0.0
@@ -284,13 +284,13 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         op = spectral_operator(lap, filt, method, tol)
         d2[redo], abs_error[redo] = _pair_norms(lap, op, s, redo, delta)
         d[redo] = np.sqrt(d2[redo])
-        kind = accuracy.weakest(kind, op.bound_kind)
+        kind = weakest(kind, op.bound_kind)
     if np.isnan(abs_error).any():
         kind = None
     info["recomputed"] = redo
     info["d2_error_bound"] = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
     info["unverified"] = unverified
-    info.update(accuracy.info(abs_error, kind, dinfo["method"]))
+    info.update(bound_info(abs_error, kind, dinfo["method"]))
     return _finish(d, info, targets, n, return_info)
 
 
@@ -406,8 +406,8 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
     rounding = 2.0 * _norm_rounding(lap) * (r[:, None] + r[None, :]) ** 2
     err = beta[:, None] + beta[None, :] + root_error(D, rounding)
     np.fill_diagonal(err, 0.0)
-    kind = accuracy.weakest(kind, lambda_max_kind(lap)) if np.all(np.isfinite(beta)) else None
-    return D, accuracy.info(err, kind, used, tol=tol, bnorm_error=beta)
+    kind = weakest(kind, lambda_max_kind(lap)) if np.all(np.isfinite(beta)) else None
+    return D, bound_info(err, kind, used, tol=tol, bnorm_error=beta)
 
 
 # ---------------------------------------------------------------------------------------

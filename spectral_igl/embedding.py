@@ -5,7 +5,7 @@ import numbers
 
 import numpy as np
 
-from . import accuracy
+from .accuracy import info as bound_info
 from ._validate import as_flag, check_finite_result
 from .diagonal import phi_values
 from .filters import check_filter
@@ -62,6 +62,6 @@ def spectral_embedding(lap, filt, k: int, return_info: bool = False):
     out = (X * ph[None, :])[:, c:c + k]
     if not return_info:
         return out
-    return out, accuracy.info(np.full(out.shape, np.nan), None, "dense" if dense else "lanczos",
+    return out, bound_info(np.full(out.shape, np.nan), None, "dense" if dense else "lanczos",
                               note="eigenvectors are defined up to sign (and a rotation within a "
                                    "repeated eigenvalue) and are not certified: no per-entry bound")

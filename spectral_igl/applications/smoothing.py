@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .. import accuracy
+from ..accuracy import info as bound_info, weakest
 from .._validate import as_flag, as_indices, as_nonnegative, as_positive, as_signal
 from ..approx import SpectralOperator
 from ..filters import heat
@@ -135,5 +135,5 @@ def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8, return_
     if not return_info:
         return u
     bnorm = np.asarray(np.nan if op.error_bound is None else op.error_bound, dtype=float)
-    kind = accuracy.weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bnorm)) else None
-    return u, accuracy.info(entry_error(lap, bnorm), kind, op.method, tol=tol, bnorm_error=bnorm)
+    kind = weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bnorm)) else None
+    return u, bound_info(entry_error(lap, bnorm), kind, op.method, tol=tol, bnorm_error=bnorm)

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import accuracy
+from ..accuracy import weakest
 from .._validate import as_indices, as_positive, describe
 from ..filters import FILTERS, by_name
 from .store import BOUND_SUFFIX
@@ -253,7 +253,7 @@ class Job:
                 kinds.append(info["bound_kind"])
                 d2.append(info.get("d2_error_bound"))
             return _bounded({"distances": np.stack(rows), "sources": np.asarray(p["sources"], dtype=np.int64)},
-                            "distances", np.stack(errs), accuracy.weakest(*kinds), info["method"],
+                            "distances", np.stack(errs), weakest(*kinds), info["method"],
                             d2_error_bound=d2)
         if self.kind == "eigenvalues":
             from ..linalg import dense_eigs, eigs

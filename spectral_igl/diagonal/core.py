@@ -44,7 +44,7 @@ import logging
 
 import numpy as np
 
-from .. import accuracy
+from ..accuracy import info as bound_info, weakest
 from .._validate import as_choice, as_delta, as_flag, as_int, as_tol, check_dense_size, check_spectral_function
 from ..approx import LARGE_T, spectral_operator
 from ..approx import METHODS as ENGINE_METHODS
@@ -217,7 +217,7 @@ def _bounded(info, abs_error, kind, note=None):
     """``info`` with the per-vertex ``abs_error``, its ``bound_kind``, the largest entry as
     ``abs_error_bound`` and, when given, the ``note`` saying why the bound is weak or absent."""
     abs_error = np.asarray(abs_error, dtype=float)
-    info.update(accuracy.info(abs_error, kind, info["method"]))
+    info.update(bound_info(abs_error, kind, info["method"]))
     info["abs_error_bound"] = float(np.max(abs_error, initial=0.0)) if np.all(np.isfinite(abs_error)) \
         else float("nan")
     if note is not None:
@@ -271,7 +271,9 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         minv = inverse_mass_diagonal(lap)
         vol = lap.component_volume()
         if decay * float(np.max(minv * vol)) <= tol:
-            diag, bound = 1.0 / vol, decay * minv
+            # plus the rounding of the volume (a sum of n masses) and of its reciprocal
+            diag = 1.0 / vol
+            bound = decay * minv + (n + 2) * np.finfo(float).eps * diag
             if delta == "seed":
                 diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
             info["method"] = "projection"
@@ -331,7 +333,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
             bar.update()
         bar.close()
         info["applications"] = n
-        kind = accuracy.weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bound)) else None
+        kind = weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bound)) else None
         return diag, _bounded(info, bound, kind)
 
     diag, pinfo = probing_diagonal(lap, filt, G, delta, k, distance, samples, rtol, max_colours, seed,
