@@ -38,7 +38,7 @@ from .progress import enabled as progress_enabled
 from .progress import progress_bar
 from .quantity import QUANTITIES, color_meaning, evaluate
 
-__all__ = ["main", "check_writable", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
+__all__ = ["main", "check_writable", "bound_text", "EXIT_OK", "EXIT_ERROR", "EXIT_USAGE", "EXIT_INPUT", "EXIT_MISSING"]
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INPUT, EXIT_MISSING = 0, 1, 2, 3, 4
 
@@ -399,6 +399,23 @@ def _say(args, text):
         print(text)
 
 
+def bound_text(abs_error, kind, why: str = "the method gives none") -> str:
+    """How the command line reports a result's accuracy: the largest per-entry bound of
+    ``abs_error`` and its kind (:mod:`spectral_igl.accuracy`), or that there is none and why.
+
+    Examples
+    --------
+    >>> bound_text([1e-9, 3e-9], "proof")
+    'error bound 3e-09 (proof, largest over the entries)'
+    >>> bound_text([float("nan")], None, "the heat method is not certified")
+    'error bound: none (the heat method is not certified)'
+    """
+    e = np.asarray(abs_error, dtype=float)
+    if kind is None or e.size == 0 or not np.all(np.isfinite(e)):
+        return f"error bound: none ({why})"
+    return f"error bound {float(np.max(e)):.3g} ({kind}, largest over the entries)"
+
+
 # ---- jobs ---------------------------------------------------------------------------------
 def _job_kernel_distance(args):
     _check_outputs(args.out, _OUTPUTS)
@@ -425,9 +442,9 @@ def _job_kernel_distance(args):
            title=f"{ev.label} ({name})", names=[f"{args.filter}_{args.job}"])
     prog.update()
     prog.close()
-    bound = "n/a" if ev.error_bound is None else f"{ev.error_bound:.3g} ({ev.bound_kind})"
     _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
-               f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; error bound {bound}; "
+               f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; "
+               f"{bound_text(ev.abs_error, ev.bound_kind, f'method {ev.method}')}; "
                f"{ev.seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
 
@@ -440,12 +457,15 @@ def _job_hks(args):
     if times is None:
         times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
     start = time.perf_counter()     # one bar step per time (progress=None: the CLI's setting)
-    H = np.asarray(hks(lap, np.asarray(times, dtype=float), method=args.diagonal,
-                       engine_method=args.method, tol=args.tol), dtype=float).reshape(lap.n, len(times))
+    H, info = hks(lap, np.asarray(times, dtype=float), method=args.diagonal, engine_method=args.method,
+                  tol=args.tol, return_info=True)
+    H = np.asarray(H, dtype=float).reshape(lap.n, len(times))
     seconds = time.perf_counter() - start
     _write(args.out, H, V, C, args, kind="sequential", title=f"HKS t={times[len(times) // 2]:.3g} ({name})",
            names=[f"t={t:.4g}" for t in times])
-    _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); {seconds:.3g} s"
+    why = info.get("note", f"method {info['method']}")
+    _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); "
+               f"{bound_text(info['abs_error'], info['bound_kind'], why)}; {seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
 
@@ -498,7 +518,8 @@ def _job_smooth(args):
         cols = f.reshape(lap.n, -1).T
         t = float(np.median([optimal_time(lap, c, method=args.method, tol=args.tol)[0] for c in cols]))
     start = time.perf_counter()
-    g = np.asarray(diffusion_smooth(lap, f, t, method=args.method, tol=args.tol))
+    g, info = diffusion_smooth(lap, f, t, method=args.method, tol=args.tol, return_info=True)
+    g = np.asarray(g)
     seconds = time.perf_counter() - start
     if geometry:
         mesh_outs = [o for o in args.out if Path(o).suffix.lower() in mesh_types]
@@ -515,8 +536,9 @@ def _job_smooth(args):
     else:
         _write(args.out, g, V, C, args, kind="auto", title=f"smoothed, t={t:.3g}",
                names=["smoothed"] if g.ndim == 1 else [f"smoothed{j}" for j in range(g.shape[1])])
-    _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {seconds:.3g} s"
-               + "".join(f"\nwrote {o}" for o in args.out))
+    bound = bound_text(info["abs_error"], info["bound_kind"], f"method {info['method']}")
+    _say(args, f"diffusion smoothing on {name} ({lap.n} vertices) at t={t:.4g}; {bound}; "
+               f"{seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
 
 
@@ -533,7 +555,9 @@ def _job_geodesic(args):
     _write(args.out, d, V, C, args, sources=[args.source], kind="distance",
            title=f"geodesic distance ({args.method}) ({name})", names=["geodesic_distance"])
     _say(args, f"geodesic distance ({args.method}) from vertex {args.source} on {name} "
-               f"({lap.n} vertices): max {d.max():.6g}; {seconds:.3g} s"
+               f"({lap.n} vertices): max {d.max():.6g}; "
+               f"{bound_text(np.nan, None, 'an approximation of the smooth geodesic distance, not certified')}; "
+               f"{seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
 

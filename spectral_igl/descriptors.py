@@ -3,11 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_array, as_int, as_positive, as_real_in, describe
+from .accuracy import info as bound_info, weakest
+from ._validate import as_array, as_flag, as_int, as_positive, as_real_in, describe
 from .diagonal import kernel_diagonal
 from .diagonal.multiscale import family_diagonals, heat_diagonals
+from .distances import root_error
 from .filters import Filter, check_filter, heat
-from .laplacian import as_laplacian
+from .laplacian import as_laplacian, lambda_max_kind
 from .linalg import cached_eigs, dense_eigs
 from .progress import progress_bar
 
@@ -30,7 +32,27 @@ def _values(x, name):
     return a
 
 
-def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
+EPS = np.finfo(float).eps
+
+
+def _joined(methods):
+    """One method name, or the distinct names joined by ``+``."""
+    names = list(dict.fromkeys(methods))
+    return names[0] if len(names) == 1 else "+".join(names)
+
+
+def _stacked(infos, scalar, **extra):
+    """The ``info`` of diagonals computed one scale at a time: per-entry bounds side by side."""
+    err = np.stack([np.asarray(i["abs_error"], dtype=float) for i in infos], axis=1)
+    out = bound_info(err[:, 0] if scalar else err, weakest(*[i["bound_kind"] for i in infos]),
+                        _joined(i["method"] for i in infos), **extra)
+    notes = [i["note"] for i in infos if i.get("note")]
+    if notes:
+        out["note"] = "; ".join(dict.fromkeys(notes))
+    return out
+
+
+def spectral_descriptor(lap, filt, method: str = "auto", return_info: bool = False, **kwargs):
     r"""The diagonal of the spectral kernel :math:`K = \varphi(\tilde L)B^{-1}`.
 
     .. math:: SD(i) = K(i, i) = \sum_l \varphi(\lambda_l)\, x_l(i)^2
@@ -42,20 +64,23 @@ def spectral_descriptor(lap, filt, method: str = "auto", **kwargs):
     method : str
         Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: selected
         inversion of a rational approximation, with a certified error bound).
+    return_info : bool
+        Also return the diagonal's ``info`` (:func:`spectral_igl.kernel_diagonal`): the
+        per-vertex ``abs_error``, ``bound_kind``, ``method``, ...
     **kwargs
-        Passed to :func:`spectral_igl.kernel_diagonal` (``k``, ``distance``,
-        ``return_info``, ...).
+        Passed to :func:`spectral_igl.kernel_diagonal` (``k``, ``distance``, ...).
 
     Returns
     -------
     (n,) float
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
-    return kernel_diagonal(lap, filt, method=method, **kwargs)
+    return kernel_diagonal(lap, filt, method=method, return_info=return_info, **kwargs)
 
 
-def hks(lap, times, method: str = "auto", progress=None, **kwargs):
+def hks(lap, times, method: str = "auto", progress=None, return_info: bool = False, **kwargs):
     r"""Heat kernel signature (Sun et al. 2009) at one or several times.
 
     .. math:: HKS(i, t) = K_t(i, i) = \sum_l e^{-t\lambda_l}\, x_l(i)^2
@@ -70,6 +95,11 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     progress : bool, optional
         A progress bar on stderr, one step per time, with the diagonal's own bar (per
         pole) under it (see :mod:`spectral_igl.progress`; default off).
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` shaped as the
+        result, the kernel diagonal's bound at every vertex and time
+        (:func:`spectral_igl.kernel_diagonal`), ``bound_kind`` (the weakest over the times),
+        ``method``.
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
@@ -82,24 +112,33 @@ def hks(lap, times, method: str = "auto", progress=None, **kwargs):
     Returns
     -------
     (n,) float for a scalar time, (n, len(times)) float for an array of times.
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
+    return_info = as_flag(return_info, "return_info")
     T = _values(times, "times")
     Tv = T.reshape(-1)
     for t in Tv:
         as_positive(t, "time")
     if _family(lap, method, Tv.size, kwargs):
         with progress_bar(T.size, "hks", progress, unit="time") as bar:
-            out = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8)).values.copy()
+            md = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8))
+            out = md.values.copy()
             bar.update(T.size)
-        return out
-    cols = []
+        info = bound_info(md.abs_bound, weakest(md.bound_kind, lambda_max_kind(lap)), "selinv",
+                             eps=md.eps.copy(), factorizations=md.n_factorizations)
+        return (out, info) if return_info else out
+    cols, infos = [], []
     with progress_bar(T.size, "hks", progress, unit="time") as bar:
         for t in Tv:
-            cols.append(kernel_diagonal(lap, heat(float(t)), method=method, progress=progress, **kwargs))
+            d, i = kernel_diagonal(lap, heat(float(t)), method=method, progress=progress, return_info=True,
+                                   **kwargs)
+            cols.append(d)
+            infos.append(i)
             bar.set_postfix_str(f"t={t:.3g}")
             bar.update()
-    return cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
+    out = cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
+    return (out, _stacked(infos, T.ndim == 0)) if return_info else out
 
 
 def _family(lap, method, count, kwargs) -> bool:
@@ -139,27 +178,50 @@ WKS_TRACE_PROBES = 64
 WKS_DENSE_MAX = 3000
 
 
-def _wks_trace(lap, f, diag):
-    r""":math:`\operatorname{tr}\psi(\tilde L) = \operatorname{tr}(KB)`, K the kernel whose diagonal is ``diag``.
+def _wks_trace(lap, f, diag, diag_error, diag_kind):
+    r""":math:`\operatorname{tr}\psi(\tilde L) = \operatorname{tr}(KB)`, K the kernel whose diagonal is
+    ``diag``, with a bound of its error and the bound's kind: ``(trace, bound, kind, note)``.
 
-    Lumped mass: :math:`\sum_i m_i K_{ii}`, exact. Full mass: :math:`\operatorname{tr}(KB)`
-    also needs :math:`K_{ij}` on the edges, so the spectrum is used below the dense limit
-    (exact) and Hutchinson's estimate :math:`\mathbb E[z^\top\psi(\tilde L)z]` above it.
+    Lumped mass: :math:`\sum_i m_i K_{ii}`, exact, within :math:`\sum_i m_i` ``diag_error``
+    (plus the rounding of the sum). Full mass: :math:`\operatorname{tr}(KB)` also needs
+    :math:`K_{ij}` on the edges, so the spectrum is used below the dense limit (exact up to
+    the eigensolver's rounding: a model) and Hutchinson's estimate
+    :math:`\mathbb E[z^\top\psi(\tilde L)z]` above it (three standard errors of the probes'
+    mean: an estimate).
     """
     if lap.lumped:
-        return float(lap.mass @ diag)
+        tr = float(lap.mass @ diag)
+        bound = float(lap.mass @ diag_error) + (lap.n + 2) * EPS * float(lap.mass @ np.abs(diag))
+        return tr, bound, diag_kind, None
     if lap.n <= WKS_DENSE_MAX:
         lam = np.asarray(dense_eigs(lap)[0])
-        return float(np.sum(f(np.maximum(lam, 0.0))))
+        vals = f(np.maximum(lam, 0.0))
+        return (float(np.sum(vals)), 1e2 * lap.n * EPS * float(np.sum(np.abs(vals))), "estimate",
+                "the normaliser (full mass) is the sum of the filter over the dense spectrum: its "
+                "rounding is a model")
     from .approx import apply_filter
 
     Z = np.random.default_rng(0).choice([-1.0, 1.0], size=(lap.n, WKS_TRACE_PROBES))
     Y = np.real(apply_filter(lap, f, Z))
-    return float(np.mean(np.einsum("ij,ij->j", Z, Y)))
+    q = np.einsum("ij,ij->j", Z, Y)
+    return (float(np.mean(q)), 3.0 * float(np.std(q, ddof=1)) / np.sqrt(q.size), "estimate",
+            f"the normaliser (full mass) is a Hutchinson estimate with {q.size} probes: its bound is "
+            "three standard errors of their mean")
+
+
+def _ratio_error(w, d_error, tr, tr_error):
+    r"""Bound of :math:`|d/\tau - \tilde d/\tilde\tau|` from :math:`|d - \tilde d| \le \delta_d`,
+    :math:`|\tau - \tilde\tau| \le \delta_\tau`, :math:`\tilde w = \tilde d/\tilde\tau`:
+    :math:`(\delta_d + |\tilde w|\delta_\tau)/(\tilde\tau - \delta_\tau)` (:math:`\infty` unless
+    :math:`\tilde\tau > \delta_\tau`), plus the rounding of the division."""
+    low = tr - tr_error
+    if not low > 0:
+        return np.full(np.shape(w), np.inf)
+    return (d_error + np.abs(w) * tr_error) / low * (1.0 + 4.0 * EPS) + 2.0 * EPS * np.abs(w)
 
 
 def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen",
-        progress=None, **kwargs):
+        progress=None, return_info: bool = False, **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
 
     .. math:: WKS(i, e) = \frac{\sum_l \psi_e(\lambda_l)\, x_l(i)^2}{\sum_l \psi_e(\lambda_l)},
@@ -189,14 +251,24 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
     progress : bool, optional
         Spectrum-free methods: a progress bar on stderr, one step per energy (see
         :mod:`spectral_igl.progress`; default off).
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` shaped as the
+        result. Spectrum-free: the diagonal's bound :math:`\delta_d` and the normaliser's
+        :math:`\delta_\tau` propagated through the ratio,
+        :math:`(\delta_d + |\widetilde{WKS}|\,\delta_\tau)/(\tilde\tau - \delta_\tau)`;
+        ``bound_kind`` the weakest of the parts (the full-mass normaliser is an estimate, said
+        in ``note``). ``"eigen"``: ``nan`` and ``None`` (a truncated expansion by definition;
+        its eigenpairs are not certified).
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
     Returns
     -------
     (n,) float for a scalar energy, (n, E) float for an array.
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
+    return_info = as_flag(return_info, "return_info")
     E = _values(energies, "energies")
     Ev = E.reshape(-1)
     if sigma is None:
@@ -222,31 +294,50 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
         # normalised by its largest weight per energy: the ratio is unchanged, nothing underflows
         Psi = np.exp(z - z.max(axis=0))
         out = (X ** 2) @ Psi / Psi.sum(axis=0)
+        info = bound_info(np.full(out.shape, np.nan), None, "eigen", k=k,
+                             note="truncated eigen-expansion (Aubry et al.'s definition) from eigenpairs "
+                                  "that are not certified: no error bound")
     else:
         filts = [_wks_filter(float(e), sigma) for e in Ev]
-        D = None
+        md = None
         if _family(lap, method, Ev.size, kwargs):
             # common poles for all energies (set-valued AAA), each energy certified
             tol = kwargs.get("tol", 1e-8)
-            D = family_diagonals(lap, filts, max(tol * 1e-1, 1e-12), scales=np.exp(Ev)).values
-        cols = []
+            md = family_diagonals(lap, filts, max(tol * 1e-1, 1e-12), scales=np.exp(Ev))
+        cols, errs, kinds, methods, notes = [], [], [], [], []
         bar = progress_bar(Ev.size, "wks", progress, unit="energy")
         for k, f in enumerate(filts):
-            d = D[:, k] if D is not None else np.real(kernel_diagonal(lap, f, method=method,
-                                                                       progress=progress, **kwargs))
-            tr = _wks_trace(lap, f, d)
+            if md is not None:
+                d, derr = md.values[:, k], md.abs_bound[:, k]
+                kinds.append(weakest(md.bound_kind, lambda_max_kind(lap)))
+                methods.append("selinv")
+            else:
+                d, dinfo = kernel_diagonal(lap, f, method=method, progress=progress, return_info=True, **kwargs)
+                d, derr = np.real(d), dinfo["abs_error"]
+                kinds.append(dinfo["bound_kind"])
+                methods.append(dinfo["method"])
+                notes.append(dinfo.get("note"))
+            tr, tr_err, tr_kind, note = _wks_trace(lap, f, d, derr, kinds[-1])
             if not tr > 0:
                 raise ValueError(f"the WKS band at energy {float(Ev[k]):g} (sigma {sigma:g}) holds no "
                                  "eigenvalue of the shape to double precision; choose energies within "
                                  "[log lambda_2, log lambda_max] or use method='eigen'")
             cols.append(d / tr)
+            errs.append(_ratio_error(cols[-1], derr, tr, tr_err))
+            kinds.append(tr_kind)
+            notes.append(note)
             bar.update()
         bar.close()
         out = np.stack(cols, axis=1)
-    return out[:, 0] if E.ndim == 0 else out
+        info = bound_info(np.stack(errs, axis=1), weakest(*kinds), _joined(methods))
+        if any(notes):
+            info["note"] = "; ".join(dict.fromkeys(x for x in notes if x))
+    if E.ndim == 0:
+        out, info["abs_error"] = out[:, 0], info["abs_error"][:, 0]
+    return (out, info) if return_info else out
 
 
-def auto_diffusion_function(lap, t, method: str = "auto", **kwargs):
+def auto_diffusion_function(lap, t, method: str = "auto", return_info: bool = False, **kwargs):
     r"""Auto-diffusion function (Gebal et al. 2009), scale invariant.
 
     .. math:: ADF_t(i) = A\, K_{t/\lambda_2}(i, i) = A \sum_l e^{-t\lambda_l/\lambda_2}\, x_l(i)^2
@@ -255,8 +346,14 @@ def auto_diffusion_function(lap, t, method: str = "auto", **kwargs):
     Gebal et al.'s normalisation) and the value is multiplied by the area :math:`A`, so
     ADF is invariant under a uniform scaling of the shape and equals 1 at large t on a
     connected shape. Returns (n,) float, or (n, len(t)) for an array of times.
+
+    With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error``, the
+    area times the heat diagonal's bound at the time :math:`t/\tilde\lambda_2`; its
+    ``bound_kind`` is at best ``"estimate"``: :math:`\tilde\lambda_2` is a Lanczos eigenvalue
+    (not certified) and its error moves the time itself (``note``). ``lambda2`` is that value.
     """
     lap = as_laplacian(lap)
+    return_info = as_flag(return_info, "return_info")
     T = _values(t, "t")
     for ti in T.reshape(-1):
         as_positive(ti, "t")
@@ -264,11 +361,19 @@ def auto_diffusion_function(lap, t, method: str = "auto", **kwargs):
     if c >= lap.n:
         raise ValueError("the shape has no non-zero eigenvalue (every vertex is its own component)")
     lam2 = float(cached_eigs(lap, c + 1)[0][c])
-    out = hks(lap, T / lam2, method=method, **kwargs) * lap.area()
-    return out
+    H, info = hks(lap, T / lam2, method=method, return_info=True, **kwargs)
+    area = float(lap.area())
+    out = H * area
+    if not return_info:
+        return out
+    info["abs_error"] = info["abs_error"] * area * (1.0 + 2.0 * EPS) + EPS * np.abs(out)
+    info.update(bound_kind=weakest(info["bound_kind"], "estimate"), lambda2=lam2,
+                note="the time unit 1/lambda_2 comes from a Lanczos eigenvalue (not certified); the "
+                     "bound is that of the heat diagonal at the computed time, times the area")
+    return out, info
 
 
-def eccentricity(lap, filt, method: str = "auto", **kwargs):
+def eccentricity(lap, filt, method: str = "auto", return_info: bool = False, **kwargs):
     r"""Spectral eccentricity: the root-mean-square spectral distance to the shape.
 
     .. math:: ecc(i)^2 = \frac{1}{A_c}\sum_{j \in c} m_j\, d^2(i, j)
@@ -280,18 +385,36 @@ def eccentricity(lap, filt, method: str = "auto", **kwargs):
     diagonal (no n² distances). For the diffusion filter it is the survey's
     :math:`ecc_t` (§5.1) up to the square root.
 
+    With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` (n,)
+    from the diagonal's bound :math:`\delta`, :math:`|ecc^2 - \widetilde{ecc}^2| \le \delta_i +
+    \frac{1}{A_c}\sum_{j \in c} m_j\delta_j` plus the rounding of the sums, turned into a bound
+    of :math:`|ecc - \widetilde{ecc}|` by :func:`spectral_igl.distances.root_error`;
+    ``bound_kind`` and ``method`` of the diagonal.
+
     Returns
     -------
     (n,) float
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
+    return_info = as_flag(return_info, "return_info")
     G2 = filt.square
-    diag = np.real(kernel_diagonal(lap, G2, method=method, **kwargs))
+    diag, dinfo = kernel_diagonal(lap, G2, method=method, return_info=True, **kwargs)
+    diag = np.real(diag)
     m = lap.mass
     lab = lap.components
     Ac = np.bincount(lab, weights=m)
     Tc = np.bincount(lab, weights=m * diag)
     phi0 = abs(filt.at_zero()) ** 2
     e2 = diag + Tc[lab] / Ac[lab] - 2.0 * phi0 / Ac[lab]
-    return np.sqrt(np.maximum(e2, 0.0))
+    ecc = np.sqrt(np.maximum(e2, 0.0))
+    if not return_info:
+        return ecc
+    derr = np.asarray(dinfo["abs_error"], dtype=float)
+    size = np.bincount(lab)
+    mag = np.abs(diag) + (np.bincount(lab, weights=m * np.abs(diag)) / Ac)[lab] + 2.0 * phi0 / Ac[lab]
+    e2_error = derr + (np.bincount(lab, weights=m * derr) / Ac)[lab] + (size[lab] + 8) * EPS * mag
+    info = dict(dinfo, abs_error=root_error(ecc, e2_error))
+    info.pop("abs_error_bound", None)      # the diagonal's, not the eccentricity's
+    return ecc, info

@@ -15,12 +15,13 @@ import warnings
 
 import numpy as np
 
-from ._validate import as_delta, as_index, as_indices, as_int, as_positive, check_dense_size
+from .accuracy import info as bound_info, weakest
+from ._validate import as_delta, as_flag, as_index, as_indices, as_int, as_positive, check_dense_size
 from .approx import spectral_operator
 from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
                        phi_values, selinv_kernel, selinv_supported)
+from .diagonal.core import column_entry_error
 from .diagonal.selinv import NoSelinv
-from .diagonal.multiscale import heat_columns
 from .filters import (
     biharmonic,
     check_filter,
@@ -30,8 +31,8 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .kernels import block_sources, kernel_columns
-from .laplacian import as_laplacian
+from .kernels import block_sources, heat_kernels, kernel_columns
+from .laplacian import as_laplacian, lambda_max_kind, mass_ratio
 from .progress import progress_bar
 
 __all__ = [
@@ -50,6 +51,7 @@ __all__ = [
     "pairwise_polyharmonic_distance",
     "pairwise_wave_distance",
     "pairwise_mexican_hat_distance",
+    "root_error",
 ]
 
 BLOCK = 64
@@ -59,16 +61,53 @@ MAX_ORDER = 16
 MANY_TARGETS = 256
 
 
+def root_error(d, d2_error):
+    r"""Per-entry bound of :math:`|d - \tilde d|` from a bound :math:`e` of :math:`|d^2 - \tilde d^2|`.
+
+    For non-negative :math:`d, \tilde d`: :math:`|d - \tilde d| = |d^2 - \tilde d^2| / (d + \tilde d)
+    \le \min(\sqrt e,\ e / \tilde d)` (the first since :math:`|d - \tilde d|^2 \le
+    |d - \tilde d|(d + \tilde d)`). ``nan`` stays ``nan`` (no bound).
+
+    Parameters
+    ----------
+    d : float or array
+        The returned :math:`\tilde d \ge 0`.
+    d2_error : float or array
+        Bounds :math:`e` of :math:`|d^2 - \tilde d^2|`, broadcast against ``d``.
+
+    Examples
+    --------
+    >>> root_error([0.0, 2.0], 1e-4)
+    array([1.e-02, 5.e-05])
+    """
+    d = np.abs(np.asarray(d, dtype=float))
+    e = np.asarray(d2_error, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.minimum(np.sqrt(e), np.where(d > 0, e / np.where(d > 0, d, 1.0), np.inf))
+
+
+def _norm_rounding(lap) -> float:
+    r"""Relative rounding allowance of a B-norm computed as :math:`\sqrt{y^*(By)}`: each product
+    sums at most n + (row length) terms, and :math:`|y|^\top B|y| \le y^*By/c` for a mass matrix
+    with non-negative entries (c = :func:`~spectral_igl.laplacian.mass_ratio`); twice the
+    unit roundoff per term, for the square and the square root."""
+    row = int(np.max(np.diff(lap.B.indptr), initial=1))
+    return (lap.n + row + 4) * np.finfo(float).eps / mass_ratio(lap)
+
+
 def _bnorm2(lap, Y):
     """(m,) squared B-norms of the columns of Y (real or complex)."""
     BY = lap.B @ Y
     return np.real(np.einsum("ij,ij->j", np.conj(Y), BY))
 
 
-def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.ndarray:
-    """Exact d^2(source, t) = ||phi(L~) B^-1 (e_s - e_t)||_B^2 for each target, in blocks."""
+def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str):
+    """Exact d^2(source, t) = ||phi(L~) B^-1 (e_s - e_t)||_B^2 for each target, in blocks, and a
+    bound of each |d - d~|: the engine's B-norm bound of the column (reverse triangle
+    inequality) plus the rounding of the norm."""
     n = lap.n
     out = np.empty(targets.size)
+    bound = np.empty(targets.size)
     for a in range(0, targets.size, BLOCK):
         t = targets[a:a + BLOCK]
         E = np.zeros((n, t.size))
@@ -76,7 +115,12 @@ def _pair_norms(lap, op, source: int, targets: np.ndarray, delta: str) -> np.nda
         E[t, np.arange(t.size)] -= 1.0     # a zero column when t == source
         Y = op.apply_inverse_mass(E) if delta == "mass" else op.apply(E)
         out[a:a + t.size] = _bnorm2(lap, Y)
-    return np.maximum(out, 0.0)  # a B-norm squared: only -0.0 can occur
+        eb = op.error_bound
+        bound[a:a + t.size] = np.nan if eb is None else np.broadcast_to(np.asarray(eb, dtype=float), (t.size,))
+    out = np.maximum(out, 0.0)  # a B-norm squared: only -0.0 can occur
+    bound = bound + _norm_rounding(lap) * np.sqrt(out)
+    bound[targets == source] = 0.0
+    return out, bound
 
 
 def _coming_selinv_kernel(lap, G2, diagonal, delta, tol):
@@ -125,11 +169,19 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         (one engine application each); the others keep the estimate, clipped at 0, and
         are listed in ``info["unverified"]``. Default: all of them.
     return_info : bool
-        Also return a dict: the diagonal's ``info`` plus ``recomputed`` (targets whose
-        distance was recomputed exactly as a norm), ``unverified`` and, for one-to-all,
-        ``d2_error_bound`` (a bound on every :math:`|d^2 - \tilde d^2|`, certified when the
-        diagonal is exact; then :math:`|d - \tilde d| \le` its square root) and its
-        ``bound_kind`` (``"proof"`` or ``"estimate"``).
+        Also return a dict (:mod:`spectral_igl.accuracy`): ``abs_error``, a bound of
+        :math:`|d - \tilde d|` for every returned distance (shaped as ``d``; ``nan`` where there
+        is none), ``bound_kind`` (``"proof"``, ``"estimate"`` or ``None``: the weakest of its
+        parts), ``method`` (the diagonal's method for one-to-all, else the engine's),
+        ``engine_method``. Distances computed as norms of filtered differences are within
+        the engine's B-norm bound of that difference (plus the rounding of the norm); the
+        others come from :math:`d^2 = G_{ss} + G_{jj} - 2G_{js}` with a bound :math:`e_j` of
+        :math:`|d^2 - \tilde d^2|` (the diagonal's bound at j and s, the column's per-entry
+        bound, the rounding of the cancellation) and :math:`|d - \tilde d| \le
+        \min(\sqrt{e_j}, e_j/\tilde d)` (:func:`root_error`). One-to-all also gives the
+        diagonal's ``info`` (its ``bound_kind`` as ``diagonal_bound_kind``), ``recomputed``
+        (targets recomputed exactly as a norm), ``unverified`` and ``d2_error_bound`` (the
+        largest :math:`e_j` of the entries not recomputed).
     progress : bool, optional
         One-to-all: a progress bar on stderr over the diagonal's poles or blocks (see
         :mod:`spectral_igl.progress`; default off).
@@ -155,21 +207,24 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     k, distance, samples, rtol, max_colours, tol, _ = check_diagonal_options(
         n, diagonal, k, distance, samples, rtol, max_colours, tol, method)
     max_recompute = None if max_recompute is None else as_int(max_recompute, "max_recompute", lo=0)
+    return_info = as_flag(return_info, "return_info")
     if targets is not None:
         as_indices(targets, n, "targets")
-    info = {}
     if diagonal == "eigen":
         d = _eigen_distance(lap, filt, s, k, delta)
-        d = d if targets is None else _select(d, targets, n)
-        return (d, {"method": "eigen", "k": k}) if return_info else d
+        info = bound_info(np.full(n, np.nan), None, "eigen", k=k,
+                             note="truncated eigen-expansion: no error bound")
+        return _finish(d, info, targets, n, return_info)
 
-    scalar = targets is not None and np.ndim(targets) == 0
     if targets is not None:
         t = as_indices(targets, n, "targets")
         if not (t.size > MANY_TARGETS and n > EXACT_MAX):
             op = spectral_operator(lap, filt, method, tol)
-            d = np.sqrt(_pair_norms(lap, op, s, t, delta))
-            return _finish(d[0] if scalar else d, info, return_info)
+            d2, bound = _pair_norms(lap, op, s, t, delta)
+            info = bound_info(bound, weakest(op.bound_kind, lambda_max_kind(lap)), op.method,
+                                 tol=tol, engine_method=op.method)
+            return _finish(np.sqrt(d2), info, np.arange(t.size) if np.ndim(targets) else 0, t.size,
+                           return_info)
 
     # one-to-all: column of G, diagonal of G
     G2 = filt.square
@@ -182,7 +237,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
                                   samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
                                   engine_method=method, return_info=True, progress=progress)
     diag = np.real(diag)
-    info.update(dinfo)
+    info = dict(dinfo, diagonal_bound_kind=dinfo["bound_kind"], tol=tol)
     if dinfo["method"] == "selinv":
         # the column from the same approximation R as the diagonal: d^2 is then R's own
         # squared distance, |d^2 - d_R^2| <= eps ||B^-1(e_i - e_s)||_B^2 <= 2 (bound_i + bound_s)
@@ -194,31 +249,23 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
             col = lap.mass * kern.columns(e * lap.mass[:, None])[:, 0]
             bound = bound * lap.mass ** 2
         err = 2.0 * (bound + bound[s])
-        info["bound_kind"] = kern.bound_kind
+        kind = kern.bound_kind
     else:
         op2 = spectral_operator(lap, G2, method, tol)
         col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
-        col_bound = np.atleast_1d(np.asarray(op2.error_bound, dtype=float))
-        col_bound = float(np.nan_to_num(np.max(col_bound), nan=0.0))
-        # error of each d^2 entry: the diagonal's (bound or measured sample error), the
-        # column's certified bound, and rounding of the cancellation
-        if dinfo["method"] == "exact":
-            derr = dinfo.get("abs_error_bound", np.nan)
-        else:
-            derr = 10.0 * dinfo.get("sample_abs_error", np.nan)
-        if not np.isfinite(derr):
-            derr = 0.0
-        minv = 1.0 / lap.mass
-        fac = 1.0 if lap.lumped else 5.0
-        cerr = col_bound * np.sqrt(fac * minv * minv[s]) if delta == "mass" else 0.0
-        err = 2.0 * derr + 2.0 * cerr
-        proved = dinfo.get("bound_kind") == "proof" and op2.bound_kind == "proof"
-        info["bound_kind"] = "proof" if proved else "estimate"
+        col_bound = np.nan if op2.error_bound is None else float(np.max(op2.error_bound))
+        # |d^2 - d~^2| <= |dG_ss| + |dG_jj| + 2 |dG_js|: the diagonal's per-vertex bound (or
+        # estimate) at j and s, and the column's per-entry bound
+        derr = np.asarray(dinfo["abs_error"], dtype=float)
+        err = derr + derr[s] + 2.0 * column_entry_error(lap, col_bound, delta)
+        kind = weakest(dinfo["bound_kind"], op2.bound_kind, lambda_max_kind(lap))
+        info["engine_method"] = op2.method
     d2 = diag[s] + diag - 2.0 * col
     d2[s] = 0.0
-    # plus the rounding of the cancellation
+    # plus the rounding of the cancellation (without a bound of the parts, the entries near 0
+    # are still recomputed; the others then have no bound)
     thr = err + 64.0 * np.finfo(float).eps * (np.abs(diag[s]) + np.abs(diag) + 2.0 * np.abs(col))
-    redo = np.flatnonzero(d2 <= thr)
+    redo = np.flatnonzero(d2 <= np.nan_to_num(thr, nan=0.0))
     redo = redo[redo != s]
     unverified = redo[:0]
     if max_recompute is not None and redo.size > int(max_recompute):
@@ -228,21 +275,30 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         warnings.warn(f"{redo.size} one-to-all distances were within the diagonal's error of 0 and "
                       "are recomputed exactly; a more accurate diagonal (method='exact') is cheaper",
                       RuntimeWarning, stacklevel=2)
+    d = np.sqrt(np.maximum(d2, 0.0))  # every entry is either > thr > 0, an exact norm or unverified
+    # |d^2 - d~^2| <= thr for every entry not recomputed (clipping an unverified d~^2 < 0 at 0
+    # only moves it closer); recomputed entries are norms with their own bound
+    abs_error = root_error(d, thr)
+    abs_error[s] = 0.0
     if redo.size:
         op = spectral_operator(lap, filt, method, tol)
-        d2[redo] = _pair_norms(lap, op, s, redo, delta)
+        d2[redo], abs_error[redo] = _pair_norms(lap, op, s, redo, delta)
+        d[redo] = np.sqrt(d2[redo])
+        kind = weakest(kind, op.bound_kind)
+    if np.isnan(abs_error).any():
+        kind = None
     info["recomputed"] = redo
-    # |d^2 - d~^2| <= thr for every entry not recomputed (certified when the diagonal is
-    # exact, an estimate from the probing samples otherwise); recomputed entries are norms
     info["d2_error_bound"] = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
     info["unverified"] = unverified
-    d = np.sqrt(np.maximum(d2, 0.0))  # every entry is either > thr > 0 or an exact norm
+    info.update(bound_info(abs_error, kind, dinfo["method"]))
+    return _finish(d, info, targets, n, return_info)
+
+
+def _finish(d, info, targets, n, return_info):
+    """``d`` (and the per-entry fields of ``info``) at ``targets`` (all for None)."""
     if targets is not None:
         d = _select(d, targets, n)
-    return _finish(d, info, return_info)
-
-
-def _finish(d, info, return_info):
+        info["abs_error"] = _select(info["abs_error"], targets, n)
     return (d, info) if return_info else d
 
 
@@ -262,7 +318,8 @@ def _eigen_distance(lap, filt, s, k, delta):
 
 
 def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: str = "auto",
-                               tol: float = 1e-8, progress=None, block: int = 16):
+                               tol: float = 1e-8, progress=None, block: int = 16,
+                               return_info: bool = False):
     r"""(m, m) spectral distances between all pairs of ``seeds``.
 
     .. math:: D_{ab} = \|\varphi(\tilde L)B^{-1}(e_{s_a} - e_{s_b})\|_B
@@ -293,10 +350,17 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
         :mod:`spectral_igl.progress`; default off).
     block : int
         Kernel columns computed together: one step of the bar.
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` (m, m), a bound of
+        every :math:`|D_{ab} - \tilde D_{ab}|`: the B-norm bounds :math:`\beta_a + \beta_b` of
+        the two columns (reverse triangle inequality) plus the rounding of the Gram matrix
+        through :func:`root_error`; ``bound_kind``, ``method``, ``tol`` and ``bnorm_error``
+        (the :math:`\beta_a`).
 
     Returns
     -------
     D : (m, m) float, symmetric, zero diagonal.
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
@@ -307,18 +371,22 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
                      f"the kernel columns ({lap.n}, {m}) and the ({m}, {m}) distance matrix of {m} seeds",
                      "use fewer seeds, or OneToAll(lap, filt).distance(seed) one seed at a time")
     block = as_int(block, "block", lo=1)
+    return_info = as_flag(return_info, "return_info")
     if filt.kind == "heat" and block_sources(lap, method, delta, S.size):
         # one factorization per pole, every seed in one block right-hand side
-        C = heat_columns(lap, [filt.params["t"]], S, tol=tol)[0][:, :, 0]
+        C, hinfo = heat_kernels(lap, [filt.params["t"]], S, tol=tol, return_info=True)
+        C, beta, kind, used = C[:, :, 0], hinfo["bnorm_error"][:, 0], hinfo["bound_kind"], hinfo["method"]
     else:
         op = spectral_operator(lap, filt, method, tol)
         blocks = np.array_split(S, -(-S.size // max(int(block), 1)))
         with progress_bar(len(blocks), "pairwise distances", progress, unit="block") as bar:
-            cols = []
+            cols, beta = [], []
             for blk in blocks:
-                cols.append(kernel_columns(lap, filt, blk, delta=delta, op=op))
+                c, b = kernel_columns(lap, filt, blk, delta=delta, op=op, return_bound=True)
+                cols.append(c)
+                beta.append(b)
                 bar.update()
-        C = np.concatenate(cols, axis=1)
+        C, beta, kind, used = np.concatenate(cols, axis=1), np.concatenate(beta), op.bound_kind, op.method
     BC = lap.B @ C
     Gm = np.real(np.conj(C).T @ BC)
     g = np.diag(Gm).copy()
@@ -329,7 +397,17 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
         D2[a, b] = D2[b, a] = float(np.real(np.vdot(diff, lap.B @ diff)))
     D2 = (D2 + D2.T) / 2.0
     np.fill_diagonal(D2, 0.0)
-    return np.sqrt(np.maximum(D2, 0.0))
+    D = np.sqrt(np.maximum(D2, 0.0))
+    if not return_info:
+        return D
+    # |D_ab - ||C~_a - C~_b||_B| <= beta_a + beta_b; the computed D2 is within the Gram
+    # products' rounding of ||C~_a - C~_b||_B^2, |C_a|^T B |C_b| <= sqrt(g_a g_b) / c
+    r = np.sqrt(np.maximum(g, 0.0))
+    rounding = 2.0 * _norm_rounding(lap) * (r[:, None] + r[None, :]) ** 2
+    err = beta[:, None] + beta[None, :] + root_error(D, rounding)
+    np.fill_diagonal(err, 0.0)
+    kind = weakest(kind, lambda_max_kind(lap)) if np.all(np.isfinite(beta)) else None
+    return D, bound_info(err, kind, used, tol=tol, bnorm_error=beta)
 
 
 # ---------------------------------------------------------------------------------------

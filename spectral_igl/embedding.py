@@ -3,7 +3,10 @@ from __future__ import annotations
 
 import numbers
 
-from ._validate import check_finite_result
+import numpy as np
+
+from .accuracy import info as bound_info
+from ._validate import as_flag, check_finite_result
 from .diagonal import phi_values
 from .filters import check_filter
 from .laplacian import as_laplacian
@@ -12,7 +15,7 @@ from .linalg import dense_eigs, eigs
 __all__ = ["spectral_embedding"]
 
 
-def spectral_embedding(lap, filt, k: int):
+def spectral_embedding(lap, filt, k: int, return_info: bool = False):
     r"""The spectral embedding :math:`x \mapsto (\varphi(\lambda_l)\, x_l(x))_{l}` with ``k``
     eigenpairs.
 
@@ -31,19 +34,34 @@ def spectral_embedding(lap, filt, k: int):
     filt : Filter
     k : int
         Number of non-zero eigenpairs, ``1 <= k <= n - c``.
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` is ``nan`` and
+        ``bound_kind`` ``None``. No per-entry bound is derivable: an eigenvector is defined only
+        up to its sign, and within a repeated eigenvalue (the sphere's, any symmetric shape's)
+        up to a rotation of the eigenspace, so the entries themselves are not determined by
+        (L, B); the eigenpairs come from Lanczos or a dense solver without a certificate
+        (``note``). ``method`` is ``"lanczos"`` or ``"dense"``.
 
     Returns
     -------
     (n, k) float (complex for a complex filter)
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
+    return_info = as_flag(return_info, "return_info")
     if isinstance(k, bool) or not isinstance(k, numbers.Integral):
         raise TypeError(f"k must be an integer, got {type(k).__name__}")
     c, n = lap.n_components, lap.n
     if not 1 <= k <= n - c:
         raise ValueError(f"k must be in [1, {n - c}], got {k}")
-    lam, X = eigs(lap, c + k) if c + k < n else dense_eigs(lap)
+    dense = c + k >= n
+    lam, X = dense_eigs(lap) if dense else eigs(lap, c + k)
     ph = phi_values(filt, lam, c)
     check_finite_result(ph[c:c + k], f"{filt!r} at the {k} eigenvalues", "check the filter's parameters")
-    return (X * ph[None, :])[:, c:c + k]
+    out = (X * ph[None, :])[:, c:c + k]
+    if not return_info:
+        return out
+    return out, bound_info(np.full(out.shape, np.nan), None, "dense" if dense else "lanczos",
+                              note="eigenvectors are defined up to sign (and a rotation within a "
+                                   "repeated eigenvalue) and are not certified: no per-entry bound")

@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 from ._validate import as_index, as_int
-from .approx import spectral_operator
 from .distances import MAX_ORDER, spectral_distance
 from .filters import FILTERS, by_name
+from .kernels import spectral_kernel
 
 __all__ = ["QUANTITIES", "FILTERED", "evaluate", "Evaluation", "uses_time", "color_meaning"]
 
@@ -54,25 +54,37 @@ def uses_time(quantity: str, filter: str) -> bool:
 
 
 class Evaluation:
-    """Values on the vertices with the certified error bound and the wall time."""
+    """Values on the vertices with their error bounds (:mod:`spectral_igl.accuracy`) and the
+    wall time.
 
-    def __init__(self, values, error_bound, seconds, label, bound_kind=None):
+    Attributes
+    ----------
+    values : (n,) float
+    abs_error : (n,) float
+        A bound of :math:`|\text{exact} - \text{returned}|` at every vertex (``nan`` where
+        there is none).
+    error_bound : float or None
+        The largest ``abs_error``; ``None`` without a bound.
+    bound_kind : {"proof", "estimate"} or None
+    method : str or None
+        The method that produced the values.
+    seconds : float
+    label : str
+    """
+
+    def __init__(self, values, abs_error, seconds, label, bound_kind=None, method=None):
         self.values = values
-        self.error_bound = error_bound
-        self.bound_kind = bound_kind
+        self.abs_error = np.broadcast_to(np.asarray(abs_error, dtype=float), values.shape)
+        finite = self.abs_error.size and np.all(np.isfinite(self.abs_error))
+        self.error_bound = float(np.max(self.abs_error)) if finite else None
+        self.bound_kind = bound_kind if finite else None
+        self.method = method
         self.seconds = seconds
         self.label = label
 
     def __repr__(self):
         return (f"Evaluation({self.label}, n={self.values.shape[0]}, "
                 f"error_bound={self.error_bound}, seconds={self.seconds:.3g})")
-
-
-def _bound(x):
-    if x is None:
-        return None
-    x = np.asarray(x, dtype=float)
-    return float(np.max(x)) if x.size else None
 
 
 def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | None = None,
@@ -104,10 +116,11 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     Returns
     -------
     Evaluation
-        ``values`` (n,) float (the real part for the complex wave filter), ``error_bound``
-        (absolute: in the B-norm for a kernel column, the largest bound on
-        :math:`|d_j - \tilde d_j|` for distances; ``None`` when the method gives none),
-        ``seconds``, ``bound_kind`` (``"proof"``, ``"estimate"``, or ``None`` without a bound).
+        ``values`` (n,) float (the real part for the complex wave filter), ``abs_error`` (a
+        bound of every entry's error, from the kernel's or the distance's ``info``),
+        ``error_bound`` (its largest entry; ``None`` when the method gives no bound),
+        ``bound_kind`` (``"proof"``, ``"estimate"``, or ``None`` without a bound), ``method``,
+        ``seconds``.
     """
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
@@ -118,36 +131,17 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
 
         start = time.perf_counter()
         values = np.asarray(geodesic_distance(lap, source), dtype=float).ravel()
-        return Evaluation(values, None, time.perf_counter() - start, "geodesic distance (heat method)")
+        return Evaluation(values, np.nan, time.perf_counter() - start, "geodesic distance (heat method)",
+                          method="heat method")
     filt = by_name(filter, t, order)
     label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter][1] else "")
     start = time.perf_counter()
     if quantity == "kernel":
-        op = spectral_operator(lap, filt, method=method, tol=tol)
-        e = np.zeros(lap.n)
-        e[source] = 1.0
-        values = op.apply_inverse_mass(e)
-        bound = _bound(op.error_bound)
-        kind = op.bound_kind if bound is not None else None
-        values = np.real(values) if np.iscomplexobj(values) else values
+        values, info = spectral_kernel(lap, filt, source, method=method, tol=tol, return_info=True)
+        values = np.real(values)     # |Re e| <= |e|: the bound of the complex entry holds
     else:
-        values, bound, kind = _distance(lap, filt, source, method, tol, diagonal)
+        values, info = spectral_distance(lap, filt, source, method=method, tol=tol, diagonal=diagonal,
+                                         return_info=True)
     seconds = time.perf_counter() - start
-    return Evaluation(np.asarray(values, dtype=float).ravel(), bound, seconds, label, kind)
-
-
-def _distance(lap, filt, source, method, tol, diagonal="auto"):
-    """Distances from ``source``, a bound on each |d - d~| (``None`` when there is none) and its kind.
-
-    For non-negative d, d~: ``|d - d~| = |d^2 - d~^2| / (d + d~) <= min(sqrt(e), e / d~)``
-    with ``e`` the bound on the squared distances.
-    """
-    out, info = spectral_distance(lap, filt, source, method=method, tol=tol, diagonal=diagonal,
-                                  return_info=True)
-    out = np.asarray(out)
-    e = info.get("d2_error_bound")
-    if e is None or not np.isfinite(e):
-        return out, None, None
-    d = np.delete(np.abs(out), source)
-    per = np.minimum(np.sqrt(e), e / np.maximum(d, np.finfo(float).tiny))
-    return out, float(per.max(initial=0.0)), info.get("bound_kind", "estimate")
+    return Evaluation(np.asarray(values, dtype=float).ravel(), info["abs_error"], seconds, label,
+                      info["bound_kind"], info["method"])

@@ -4,10 +4,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_nonnegative, as_positive, as_signal
-from ..approx import apply_filter
+from ..accuracy import info as bound_info, weakest
+from .._validate import as_flag, as_indices, as_nonnegative, as_positive, as_signal
+from ..approx import SpectralOperator
 from ..filters import heat
-from ..laplacian import as_laplacian
+from ..laplacian import as_laplacian, entry_error, lambda_max_kind
 from ..linalg import factorize
 from .harmonic import constraints, polyharmonic_matrix
 
@@ -101,7 +102,7 @@ def smooth_constrained(lap, f, fixed, eps: float = 0.0):
     return out
 
 
-def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8):
+def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8, return_info: bool = False):
     r"""Diffusion smoothing: the heat filter :math:`e^{-t\tilde L} f`, through the engine.
 
     .. math:: \tilde f = e^{-t \tilde L} f = \sum_i e^{-\lambda_i t}\langle f, x_i\rangle_B\, x_i
@@ -114,12 +115,25 @@ def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8):
         Diffusion time, > 0 (physical time; see :func:`optimal_time` to choose it).
     method, tol
         Passed to :func:`spectral_igl.apply_filter`.
+    return_info : bool
+        Also return ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` shaped as the
+        result, every entry's bound from the engine's B-norm bound of its column
+        (:func:`spectral_igl.laplacian.entry_error`), ``bound_kind``, ``method``, ``tol`` and
+        ``bnorm_error``.
 
     Returns
     -------
     (n,) or (n, k) float
+    info : dict, only with ``return_info``
     """
     lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
     t = as_positive(t, "t")
-    return np.real(apply_filter(lap, heat(t), f, method=method, tol=tol))
+    return_info = as_flag(return_info, "return_info")
+    op = SpectralOperator(lap, heat(t), method=method, tol=tol)
+    u = np.real(op.apply(f))
+    if not return_info:
+        return u
+    bnorm = np.asarray(np.nan if op.error_bound is None else op.error_bound, dtype=float)
+    kind = weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bnorm)) else None
+    return u, bound_info(entry_error(lap, bnorm), kind, op.method, tol=tol, bnorm_error=bnorm)

@@ -13,10 +13,30 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..accuracy import weakest
 from .._validate import as_indices, as_positive, describe
 from ..filters import FILTERS, by_name
+from .store import BOUND_SUFFIX
 
 __all__ = ["Job"]
+
+
+def _largest(abs_error):
+    """The largest entry of a bound, or None where any entry has none (nan)."""
+    e = np.asarray(abs_error, dtype=float)
+    return float(np.max(e)) if e.size and np.all(np.isfinite(e)) else None
+
+
+def _bounded(arrays, key, abs_error, kind, method, **extra):
+    """``(arrays, bounds)`` with the per-entry bound of ``arrays[key]`` stored next to it (as
+    ``<key>_abs_error``) and its summary: the largest entry, the kind, the method."""
+    e = np.broadcast_to(np.asarray(abs_error, dtype=float), np.shape(arrays[key]))
+    arrays = dict(arrays, **{key + BOUND_SUFFIX: np.array(e)})
+    top = _largest(e)
+    bounds = {"of": key, "abs_error": top, "bound_kind": kind if top is not None else None,
+              "method": method}
+    bounds.update(extra)
+    return arrays, bounds
 
 def _floats(x, name):
     a = np.asarray(x, dtype=float) if not isinstance(x, (str, bytes)) else None
@@ -63,8 +83,10 @@ class Job:
     Build it with a constructor: :meth:`hks`, :meth:`wks`, :meth:`kernel_diagonal`,
     :meth:`distances`, :meth:`eigenvalues` or :meth:`function`. Calling the job on
     ``(name, lap)`` returns ``(arrays, bounds)``: a dict of named arrays (``(n, ...)`` per
-    vertex) and a dict of error bounds (JSON values; ``None`` where no bound exists, with
-    a ``note`` saying why).
+    vertex) with, next to the result ``<key>``, its per-entry bound ``<key>_abs_error``
+    (:mod:`spectral_igl.accuracy`), and a dict of JSON values: ``of`` (the bounded result),
+    ``abs_error`` (its largest entry; ``None`` where no bound exists, with a ``note`` saying
+    why), ``bound_kind``, ``method`` and the job's own fields.
 
     Attributes
     ----------
@@ -80,8 +102,10 @@ class Job:
     >>> from data_generators import icosphere
     >>> job = Job.hks([0.1, 1.0])
     >>> arrays, bounds = job("sphere", sig.laplacian(*icosphere(2)))
-    >>> arrays["hks"].shape, len(bounds["abs_error_bound"])
-    ((162, 2), 2)
+    >>> arrays["hks"].shape, arrays["hks_abs_error"].shape, len(bounds["abs_error_bound"])
+    ((162, 2), (162, 2), 2)
+    >>> bounds["bound_kind"], bool(bounds["abs_error"] < 1e-8)
+    ('proof', True)
     >>> Job.hks([0.1, 1.0]).key() == job.key() != Job.hks([0.1]).key()
     True
     """
@@ -97,8 +121,8 @@ class Job:
 
         .. math:: HKS(i, t) = K_t(i, i)
 
-        Stores ``"hks"``: (n, len(times)) float, and the certified ``abs_error_bound`` of
-        each time (for ``method="selinv"``/``"auto"``).
+        Stores ``"hks"``: (n, len(times)) float, its per-entry bound ``"hks_abs_error"``
+        and the largest bound of each time, ``abs_error_bound`` (:func:`spectral_igl.hks`).
         """
         return cls("hks", {"times": _floats(times, "times"), "method": str(method),
                            "tol": as_positive(tol, "tol")})
@@ -143,7 +167,8 @@ class Job:
         :func:`~spectral_igl.commute_time_distance`,
         :func:`~spectral_igl.polyharmonic_distance` or
         :func:`~spectral_igl.spectral_distance`. Stores ``"distances"``: (len(sources), n)
-        and ``"sources"``; the bound is each row's ``d2_error_bound``.
+        and ``"sources"``, with ``"distances_abs_error"``, a bound of every distance (the row's
+        ``abs_error``), and each row's ``d2_error_bound``.
         """
         src = as_indices(sources, 2 ** 62, "sources")
         params = _filter_params(filter, t, order)
@@ -195,54 +220,52 @@ class Job:
     # ---- evaluation ---------------------------------------------------------------------
     def __call__(self, name, lap):
         """Evaluate on one shape: ``(arrays, bounds)``."""
+        from ..descriptors import hks, wks
         from ..descriptors import spectral_descriptor as kernel_diagonal  # diagonal of phi(L~)B^-1
-        from ..descriptors import wks
 
         p = self.params
         if self.kind == "hks":
-            from ..filters import heat
-
-            cols, bounds = [], []
-            for t in p["times"]:
-                d, info = kernel_diagonal(lap, heat(t), method=p["method"], tol=p["tol"],
-                                          return_info=True)
-                cols.append(np.asarray(d, dtype=float).reshape(lap.n))
-                bounds.append(info.get("abs_error_bound"))
-            return {"hks": np.stack(cols, axis=1)}, {"abs_error_bound": bounds,
-                                                     "method": info.get("method")}
+            H, info = hks(lap, np.asarray(p["times"]), method=p["method"], tol=p["tol"], return_info=True)
+            H = np.asarray(H, dtype=float).reshape(lap.n, -1)
+            err = np.asarray(info["abs_error"], dtype=float).reshape(lap.n, -1)
+            return _bounded({"hks": H}, "hks", err, info["bound_kind"], info["method"],
+                            abs_error_bound=[_largest(err[:, j]) for j in range(err.shape[1])],
+                            **_note(info))
         if self.kind == "wks":
-            W = wks(lap, p["energies"], sigma=p["sigma"], k=p["k"], method=p["method"])
-            note = ("truncated eigen-expansion: no error bound" if p["method"] == "eigen"
-                    else "normalised diagonals: no bound is propagated")
-            return {"wks": np.asarray(W).reshape(lap.n, -1)}, {"abs_error_bound": None, "note": note}
+            W, info = wks(lap, p["energies"], sigma=p["sigma"], k=p["k"], method=p["method"], return_info=True)
+            return _bounded({"wks": np.asarray(W).reshape(lap.n, -1)}, "wks",
+                            np.asarray(info["abs_error"]).reshape(lap.n, -1), info["bound_kind"],
+                            info["method"], **_note(info))
         if self.kind == "kernel_diagonal":
             d, info = kernel_diagonal(lap, _make_filter(p), method=p["method"], tol=p["tol"],
                                       return_info=True)
-            b = {"abs_error_bound": info.get("abs_error_bound"), "method": info.get("method")}
+            extra = {"abs_error_bound": info.get("abs_error_bound"), **_note(info)}
             if "sample_rel_error" in info:
-                b["sample_rel_error"] = info["sample_rel_error"]
-            if info.get("method") in ("probing", "eigen", "dense"):
-                b["note"] = {"probing": "estimate: error measured at sample vertices",
-                             "eigen": "truncated eigen-expansion: no error bound",
-                             "dense": "dense eigen-decomposition: rounding only"}[info["method"]]
-            return {"diagonal": np.asarray(d)}, b
+                extra["sample_rel_error"] = info["sample_rel_error"]
+            return _bounded({"diagonal": np.asarray(d)}, "diagonal", info["abs_error"], info["bound_kind"],
+                            info["method"], **extra)
         if self.kind == "distances":
-            rows, bounds = [], []
+            rows, errs, kinds, d2 = [], [], [], []
             for s in p["sources"]:
                 d, info = _distance(lap, p, s)
                 rows.append(np.asarray(d, dtype=float))
-                bounds.append(info.get("d2_error_bound"))
-            return ({"distances": np.stack(rows), "sources": np.asarray(p["sources"], dtype=np.int64)},
-                    {"d2_error_bound": bounds, "method": info.get("method")})
+                errs.append(np.asarray(info["abs_error"], dtype=float))
+                kinds.append(info["bound_kind"])
+                d2.append(info.get("d2_error_bound"))
+            return _bounded({"distances": np.stack(rows), "sources": np.asarray(p["sources"], dtype=np.int64)},
+                            "distances", np.stack(errs), weakest(*kinds), info["method"],
+                            d2_error_bound=d2)
         if self.kind == "eigenvalues":
             from ..linalg import dense_eigs, eigs
 
             k = p["k"]
             if k > lap.n:
                 raise ValueError(f"k = {k} eigenvalues asked of a shape with {lap.n} vertices")
-            lam = eigs(lap, k)[0] if k < lap.n else dense_eigs(lap)[0]
-            return {"eigenvalues": np.asarray(lam, dtype=float)}, {
-                "abs_error_bound": None, "note": "ARPACK shift-invert Lanczos: not certified"}
+            dense = k >= lap.n
+            lam = dense_eigs(lap)[0] if dense else eigs(lap, k)[0]
+            return _bounded({"eigenvalues": np.asarray(lam, dtype=float)}, "eigenvalues", np.nan, None,
+                            "dense" if dense else "lanczos", abs_error_bound=None,
+                            note="eigenvalues from a dense solver or shift-invert Lanczos: not certified")
         out = self.fn(name, lap)
         if isinstance(out, dict):
             arrays = {str(k): np.asarray(v) for k, v in out.items()}
@@ -251,7 +274,13 @@ class Job:
         for k, v in arrays.items():
             if v.dtype == object:
                 raise TypeError(f"the job returned {k!r} as an object array; return numeric arrays")
-        return arrays, {"abs_error_bound": None, "note": "user function"}
+        return arrays, {"abs_error": None, "bound_kind": None, "abs_error_bound": None,
+                        "note": "user function: no bound"}
+
+
+def _note(info):
+    """The ``note`` of an ``info`` dict, if it has one, as keyword arguments."""
+    return {"note": info["note"]} if info.get("note") else {}
 
 
 def _distance(lap, p, s):

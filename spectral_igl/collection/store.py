@@ -23,10 +23,12 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["ShapeResult", "Loaded", "load", "write_record", "read_record", "clean_partial",
-           "check_name", "PARTIAL", "LAYOUT"]
+           "check_name", "PARTIAL", "LAYOUT", "BOUND_SUFFIX"]
 
 PARTIAL = ".partial"
 LAYOUT = 1
+#: the array ``<key>_abs_error`` holds the per-entry bound of the stored result ``<key>``
+BOUND_SUFFIX = "_abs_error"
 
 
 def _zarr():
@@ -176,7 +178,14 @@ def read_record(out, name) -> dict | None:
 
 @dataclass
 class ShapeResult:
-    """One shape's stored result: its arrays and its metadata."""
+    """One shape's stored result: its arrays and its metadata.
+
+    The accuracy of the result (:mod:`spectral_igl.accuracy`) is kept with it:
+    ``meta["bounds"]`` holds ``abs_error`` (the largest per-entry bound, ``None`` without
+    one), ``bound_kind``, ``method``, ``of`` (the bounded array) and, where the job gives
+    one, a ``note``; the per-entry bound is the array ``<of>_abs_error``. Read them with
+    :meth:`abs_error` and :attr:`bound_kind`.
+    """
 
     name: str
     arrays: dict = field(default_factory=dict)
@@ -184,6 +193,23 @@ class ShapeResult:
 
     def __getitem__(self, key):
         return self.arrays[key]
+
+    @property
+    def bound_kind(self):
+        """``"proof"``, ``"estimate"`` or ``None`` (no bound) for the stored result."""
+        return self.meta.get("bounds", {}).get("bound_kind")
+
+    def abs_error(self, key: str):
+        """Bound of every entry of ``arrays[key]``: the stored per-entry bound, else the stored
+        largest bound at every entry (a float when the arrays were not loaded); ``nan`` where
+        the result has none (``key`` is not the bounded result, or the job gives no bound)."""
+        per = self.arrays.get(key + BOUND_SUFFIX)
+        if per is not None:
+            return per
+        bounds = self.meta.get("bounds", {})
+        top = bounds.get("abs_error") if bounds.get("of") == key else None
+        top = float("nan") if top is None else float(top)
+        return np.full(self.arrays[key].shape, top) if key in self.arrays else top
 
 
 class Loaded(tuple):

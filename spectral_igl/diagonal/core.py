@@ -47,19 +47,20 @@ import logging
 
 import numpy as np
 
-from .._validate import as_choice, as_delta, as_int, as_tol, check_dense_size, check_spectral_function
+from ..accuracy import info as bound_info, weakest
+from .._validate import as_choice, as_delta, as_flag, as_int, as_tol, check_dense_size, check_spectral_function
 from ..approx import LARGE_T, spectral_operator
 from ..approx import METHODS as ENGINE_METHODS
 from ..approx.common import gamma, mass_sum_rounding
 from ..filters import check_filter
-from ..laplacian import as_laplacian, lambda_max
+from ..laplacian import as_laplacian, entry_error, lambda_max, lambda_max_kind
 from ..linalg import lambda_min_positive, lambda_min_positive_kind
 from ..progress import progress_bar
 from .probing import probing_diagonal
 from .selinv import NoSelinv, inverse_mass_diagonal, selinv_kernel, selinv_supported
-from .spectral import eigen_diagonal
+from .spectral import eigen_diagonal, low_rank, phi_values
 
-__all__ = ["kernel_diagonal", "check_diagonal_options", "METHODS", "EXACT_MAX"]
+__all__ = ["kernel_diagonal", "check_diagonal_options", "column_entry_error", "METHODS", "EXACT_MAX"]
 
 log = logging.getLogger(__name__)
 
@@ -70,6 +71,38 @@ METHODS = ("auto", "exact", "dense", "eigen", "selinv", "probing")
 EXACT_MAX = 3000
 #: columns per engine call in ``"exact"`` and ``"probing"``
 BLOCK = 64
+#: the probing estimate of every entry: this many times the largest error measured at the samples
+PROBING_SAFETY = 10.0
+#: the rounding model of the dense eigendecomposition, in units of ``n * eps * max|phi(lambda)|``
+#: (as for the engine's ``"dense"`` method)
+DENSE_ROUNDING = 1e2
+
+
+def column_entry_error(lap, bnorm_error, delta: str = "mass") -> np.ndarray:
+    r"""Per-entry bound of a kernel column from the B-norm bound of its error.
+
+    ``delta="mass"``: the column is :math:`Y = \varphi(\tilde L)B^{-1}e_i` and
+    :math:`|\delta Y_j| \le \|\delta Y\|_B / \sqrt{c\,D_{jj}}`
+    (:func:`spectral_igl.laplacian.entry_error`). ``delta="seed"``: the column is
+    :math:`BY` with :math:`Y = \varphi(\tilde L)e_i`, and
+    :math:`|e_j^\top B\,\delta Y| = |\langle e_j, \delta Y\rangle_B| \le \sqrt{B_{jj}}\,\|\delta Y\|_B`.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    bnorm_error : float or (m,) float
+        Bounds of :math:`\|\delta Y\|_B`, one per column.
+    delta : {"mass", "seed"}
+
+    Returns
+    -------
+    (n,) float for a scalar bound, (n, m) float for m bounds.
+    """
+    if delta == "mass":
+        return entry_error(lap, bnorm_error)
+    b = np.asarray(bnorm_error, dtype=float)
+    w = np.sqrt(lap.B.diagonal()) * (1.0 + 4.0 * np.finfo(float).eps)
+    return w * b if b.ndim == 0 else w[:, None] * b[None, :]
 
 
 def _gram_apply(lap, op, delta):
@@ -150,13 +183,16 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     seed : int
         Random seed of the sample vertices.
     return_info : bool
-        Also return a dict: ``method``, ``applications`` (engine columns), ``k``,
-        ``distance``, ``colours``, and for ``"probing"`` the measured ``sample_abs_error``
-        and ``sample_rel_error`` (max over the samples), the ``samples`` and, when
-        chosen, the ``predicted_rel_error``; for ``"exact"`` and ``"selinv"`` the
-        ``abs_error_bound`` (max over vertices); ``bound_kind``: ``"proof"`` when that bound
-        is proved, ``"estimate"`` when it is not (always for ``"probing"``, whose sample error
-        is measured), ``None`` without a bound (``"dense"``, ``"eigen"``).
+        Also return a dict (:mod:`spectral_igl.accuracy`): ``abs_error`` (n,), a bound of
+        :math:`|G_{ii} - \tilde G_{ii}|` at every vertex (``nan`` where there is none),
+        ``bound_kind`` (``"proof"`` for ``"selinv"``, ``"exact"`` and the large-time
+        projection with certified ingredients; ``"estimate"`` for ``"probing"``, whose error
+        is measured at the samples and scaled by :data:`PROBING_SAFETY`, and ``"dense"``, whose
+        rounding is a model; ``None`` for ``"eigen"``), ``method``, ``note`` (why a bound is
+        an estimate or missing), ``abs_error_bound`` (the largest ``abs_error``),
+        ``applications`` (engine columns), ``k``, ``distance``, ``colours``, and for
+        ``"probing"`` the measured ``sample_abs_error`` and ``sample_rel_error`` (max over
+        the samples), the ``samples`` and, when chosen, the ``predicted_rel_error``.
     progress : bool, optional
         Draw a progress bar on stderr, one step per pole (``"selinv"``) or block of 64
         columns or colours; see :mod:`spectral_igl.progress` (default: off).
@@ -169,13 +205,38 @@ def kernel_diagonal(lap, filt, method: str = "auto", delta: str = "mass", k: int
     lap = as_laplacian(lap)
     filt = check_filter(filt)
     delta = as_delta(delta)
+    return_info = as_flag(return_info, "return_info")
     k, distance, samples, rtol, max_colours, tol, seed = check_diagonal_options(
         lap.n, method, k, distance, samples, rtol, max_colours, tol, engine_method, seed)
     check_spectral_function(filt, 0.0, lambda_max(lap), repr(filt), singular=filt.singular)
     args = (method, delta, k, distance, samples, rtol, max_colours, float(tol), engine_method, seed)
     diag, info = lap.cache.fetch("diagonal", (filt,) + args, lambda: _diagonal(lap, filt, *args, progress=progress))
-    diag = diag.copy()    # the cached array stays as computed whatever the caller does
-    return (diag, dict(info)) if return_info else diag
+    diag = diag.copy()    # the cached arrays stay as computed whatever the caller does
+    if not return_info:
+        return diag
+    return diag, {key: (v.copy() if isinstance(v, np.ndarray) else v) for key, v in info.items()}
+
+
+def _bounded(info, abs_error, kind, note=None):
+    """``info`` with the per-vertex ``abs_error``, its ``bound_kind``, the largest entry as
+    ``abs_error_bound`` and, when given, the ``note`` saying why the bound is weak or absent."""
+    abs_error = np.asarray(abs_error, dtype=float)
+    info.update(bound_info(abs_error, kind, info["method"]))
+    info["abs_error_bound"] = float(np.max(abs_error, initial=0.0)) if np.all(np.isfinite(abs_error)) \
+        else float("nan")
+    if note is not None:
+        info["note"] = note
+    return info
+
+
+def _dense_rounding(lap, filt, delta):
+    r"""The rounding model of the dense diagonal: :math:`\rho\,(B^{-1})_{ii}` (``"seed"``:
+    :math:`\rho B_{ii}`), :math:`\rho` = :data:`DENSE_ROUNDING` n eps max|phi(lambda)|, the
+    B-norm error model of the engine's ``"dense"`` method applied to :math:`B^{-1}e_i`."""
+    lam, _ = low_rank(lap, None, delta)
+    top = float(np.max(np.abs(phi_values(filt, lam, lap.n_components)), initial=0.0))
+    rho = DENSE_ROUNDING * lap.n * np.finfo(float).eps * top
+    return rho * column_entry_error(lap, 1.0, delta) ** 2
 
 
 def heat_projection_applies(lap, filt) -> bool:
@@ -203,12 +264,16 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
 
     if method == "dense":
         info["k"] = n
-        return eigen_diagonal(lap, filt, None, delta), info
+        diag = eigen_diagonal(lap, filt, None, delta)
+        return diag, _bounded(info, _dense_rounding(lap, filt, delta), "estimate",
+                              "dense eigendecomposition: exact up to the eigensolver's rounding, "
+                              "bounded by a model (not a proof)")
 
     if method == "eigen":
         k = max(1, min(100 if k is None else int(k), n))
         info["k"] = k
-        return eigen_diagonal(lap, filt, k, delta), info
+        return eigen_diagonal(lap, filt, k, delta), _bounded(
+            info, np.full(n, np.nan), None, f"truncated eigen-expansion ({k} pairs): no error bound")
 
     if method in ("auto", "selinv") and heat_projection_applies(lap, filt):
         # heat at a large time is the projection onto the constants of each component:
@@ -223,9 +288,8 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
                 row = mass_sum_rounding(lap)[0]
                 grow = (1.0 + row) ** 2 * (1.0 + gamma(2)) - 1.0
                 diag, bound = diag * lap.mass ** 2, (bound * (1.0 + grow) + grow * diag) * lap.mass ** 2
-            info.update(method="projection", abs_error_bound=float(bound.max(initial=0.0)),
-                        bound_kind=lambda_min_positive_kind(lap))
-            return diag, info
+            info["method"] = "projection"
+            return diag, _bounded(info, bound, lambda_min_positive_kind(lap))
 
     if method == "selinv":
         if not selinv_supported(lap, filt, delta):
@@ -252,8 +316,8 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
                              engine_method, seed, progress)
         if delta == "seed":       # diag(B G B) = m^2 G_ii for a lumped mass
             diag, bound = diag * lap.mass ** 2, bound * lap.mass ** 2
-        info.update(factorizations=kern.n_factorizations, abs_error_bound=float(bound.max(initial=0.0)),
-                    bound_kind=kern.bound_kind)
+        info["factorizations"] = kern.n_factorizations
+        _bounded(info, bound, kern.bound_kind)
         if samples:     # the selected inversion against solves with the same factors
             exact = kern.columns(E)[idx, np.arange(samples)]
             if delta == "seed":
@@ -268,7 +332,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
     if method == "exact":
         diag = np.empty(n, dtype=dtype)
         bound = np.zeros(n)
-        minv = 1.0 / lap.mass
+        w = column_entry_error(lap, 1.0, delta)     # entry i of column i per unit B-norm error
         bar = progress_bar(-(-n // BLOCK), "kernel diagonal", progress, unit="block")
         for a in range(0, n, BLOCK):
             idx = np.arange(a, min(a + BLOCK, n))
@@ -277,18 +341,22 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
             Y = G(E)
             diag[idx] = Y[idx, np.arange(idx.size)]
             eb = np.asarray(op.error_bound if op.error_bound is not None else np.nan, dtype=float).reshape(-1)
-            # |e_i^T dY| <= ||B^-1 e_i||_B ||dY||_B, (B^-1)_ii <= 5/m_i for linear FEM masses
-            fac = 1.0 if lap.lumped else 5.0
-            bound[idx] = eb * np.sqrt(fac * minv[idx]) if delta == "mass" else np.nan
+            bound[idx] = w[idx] * eb
             bar.update()
         bar.close()
         info["applications"] = n
-        info["bound_kind"] = op.bound_kind
-        info["abs_error_bound"] = float(np.max(bound)) if np.all(np.isfinite(bound)) else float("nan")
-        return diag, info
+        kind = weakest(op.bound_kind, lambda_max_kind(lap)) if np.all(np.isfinite(bound)) else None
+        return diag, _bounded(info, bound, kind)
 
     diag, pinfo = probing_diagonal(lap, filt, G, delta, k, distance, samples, rtol, max_colours, seed,
                                    dtype, block=BLOCK, progress=progress)
     info.update(pinfo)
-    info["bound_kind"] = "estimate"     # the error is measured at sample vertices, not bounded
-    return diag, info
+    if "sample_abs_error" not in info:
+        return diag, _bounded(info, np.full(n, np.nan), None,
+                              "probing without sample vertices: the error is not measured")
+    # measured at the samples, not bounded: the largest absolute or relative sample error,
+    # whichever is larger at a vertex, times a safety factor
+    est = PROBING_SAFETY * np.maximum(info["sample_abs_error"], info["sample_rel_error"] * np.abs(diag))
+    return diag, _bounded(info, est, "estimate",
+                          f"probing: the error is measured at {info['samples'].size} sample vertices "
+                          f"and scaled by {PROBING_SAFETY:g}, not bounded")
