@@ -5,6 +5,8 @@ rounding. Every test here compares with a dense or analytic spectrum, multiplici
 included, and the skip itself is forced (by a solver that drops a pair) so that detection and
 recovery are exercised on every CPU, not only on those whose rounding happens to skip.
 """
+import os
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -160,3 +162,17 @@ def test_return_info_is_checked():
     lap = sig.laplacian(*icosphere(1))
     with pytest.raises(TypeError, match="return_info must be True or False"):
         sig.eigs(lap, 3, return_info="yes")
+
+
+@pytest.mark.skipif(not ldlt.available(), reason="compiled LDLT not built")
+def test_baseline_kernels_can_be_forced_by_the_environment():
+    # the second CI pass relies on it: GCC's target_clones resolver cannot be steered so
+    import subprocess
+    import sys
+
+    code = "from spectral_igl.linalg import ldlt; print(ldlt.kernel_isa())"
+    run = [sys.executable, "-c", code]
+    forced = subprocess.run(run, env={**os.environ, "SPECTRAL_IGL_BASELINE": "1"}, capture_output=True,
+                            text=True, check=True)
+    assert forced.stdout.strip() == "baseline"
+    assert ldlt.kernel_isa() in ("avx2", "baseline")
