@@ -69,14 +69,16 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
 
     The count is exact for the matrix the factorization actually factored,
     :math:`L - \sigma B + E` with E its backward error, whose pencil's eigenvalues are
-    within :math:`\delta = \|B^{-1/2} E B^{-1/2}\|_2` of those of :math:`(L, B)`: the count
-    is that of :math:`(L, B)` as long as :math:`\delta <` ``info["count_margin"]``. σ is
-    placed in the middle of a gap, at least :data:`COUNT_MARGIN` ``* lambda_max(lap)`` from
-    every enclosure (about :math:`10^6` rounding units of the largest eigenvalue, where an
-    unpivoted :math:`LDL^\top` of moderate growth lands), and δ is measured a posteriori
-    by a solve with the factorization (``info["count_backward_error"]``, an estimate, in
-    the scaling of D): a count whose δ exceeds a hundredth of the margin is not accepted.
-    This estimate of δ is the one ingredient not proved.
+    within :math:`\delta = \|B^{-1/2} E B^{-1/2}\|_2` of those of :math:`(L, B)`. A count
+    j so says that at most j eigenvalues of :math:`(L, B)` lie below :math:`\sigma - \delta`;
+    the enclosures hold at least j, all below :math:`\sigma -` ``info["count_margin"]``,
+    so 3. holds as long as :math:`\delta <` ``info["count_margin"]``. σ is placed in the
+    middle of a gap (30% or 70% across it where the factorization meets a zero pivot) at
+    least :data:`COUNT_MARGIN` ``* lambda_max(lap)`` wide on either side (about
+    :math:`10^6` rounding units of the largest eigenvalue), and δ is measured a posteriori
+    by a solve with the factorization (``info["count_backward_error"]``, in the scaling of
+    D): a count whose δ exceeds a hundredth of the margin is not accepted. This measured δ
+    (a lower estimate of the backward error, not a bound) is the one ingredient not proved.
 
     Parameters
     ----------
