@@ -18,6 +18,7 @@
 #include <complex>
 #include <exception>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,35 @@ using cplx = std::complex<double>;
 using i64 = int64_t;
 
 namespace {
+
+// ------------------------------------------------------------------------- instruction set
+// The hot kernels (numeric factorization, solves, selected inversion) are compiled twice,
+// for AVX2 and for the x86-64 baseline, and one is chosen at run time by the CPU. The two
+// may round differently, so SPECTRAL_IGL_BASELINE=1 in the environment forces the baseline
+// on any CPU (to test what machines without AVX2 compute). GCC's target_clones cannot be
+// steered so: its resolver asks the CPU (cpuid) directly, before any code of ours runs.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define ISA_AVX2 __attribute__((target("avx2"), noinline))
+#define ISA_BASELINE __attribute__((noinline))
+#define ISA_BODY __attribute__((always_inline)) inline
+namespace isa {
+bool avx2() {
+    static const bool yes = [] {
+        const char *env = std::getenv("SPECTRAL_IGL_BASELINE");
+        const bool baseline = env && *env && std::string(env) != "0";
+        return !baseline && __builtin_cpu_supports("avx2");
+    }();
+    return yes;
+}
+}  // namespace isa
+#else
+#define ISA_AVX2
+#define ISA_BASELINE
+#define ISA_BODY inline
+namespace isa {
+bool avx2() { return false; }
+}  // namespace isa
+#endif
 
 // ------------------------------------------------------------------------- BLAS
 // Level-3 BLAS for the large dense blocks (the fronts near the root), called through the
@@ -339,11 +369,13 @@ struct Factor {
         if (err) std::rethrow_exception(err);
     }
 
-    // the numeric factorization of the analysed pattern with values vals
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
-#endif
+    // the numeric factorization, in the instruction set chosen by isa::avx2()
+    ISA_AVX2 void numeric_avx2(const T *vals, std::exception_ptr &err) { numeric_body(vals, err); }
+    ISA_BASELINE void numeric_baseline(const T *vals, std::exception_ptr &err) { numeric_body(vals, err); }
     void numeric(const T *vals, std::exception_ptr &err) {
+        if (isa::avx2()) numeric_avx2(vals, err); else numeric_baseline(vals, err);
+    }
+    ISA_BODY void numeric_body(const T *vals, std::exception_ptr &err) {
         try {
         const Symbolic &s = *S;
         Lx.assign(s.nnz_L, T(0));
@@ -514,10 +546,19 @@ struct Factor {
     // buffer and applied once (the block's nc rows of X stay in cache; the scattered rows
     // of X are touched once per supernode, not once per column).
     template <size_t K>
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
-#endif
-    void solve_block(T *x, size_t k_dyn, const int *lo, const int *hi, std::exception_ptr &err) const {
+    ISA_AVX2 void solve_block_avx2(T *x, size_t k, const int *lo, const int *hi, std::exception_ptr &err) const {
+        solve_block_body<K>(x, k, lo, hi, err);
+    }
+    template <size_t K>
+    ISA_BASELINE void solve_block_baseline(T *x, size_t k, const int *lo, const int *hi, std::exception_ptr &err) const {
+        solve_block_body<K>(x, k, lo, hi, err);
+    }
+    template <size_t K>
+    void solve_block(T *x, size_t k, const int *lo, const int *hi, std::exception_ptr &err) const {
+        if (isa::avx2()) solve_block_avx2<K>(x, k, lo, hi, err); else solve_block_baseline<K>(x, k, lo, hi, err);
+    }
+    template <size_t K>
+    ISA_BODY void solve_block_body(T *x, size_t k_dyn, const int *lo, const int *hi, std::exception_ptr &err) const {
         try {
         const size_t k = K ? K : k_dyn;
         const Symbolic &s = *S;
@@ -612,10 +653,16 @@ struct Factor {
         return out;
     }
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-    __attribute__((target_clones("avx2", "default")))   // chosen at run time by the CPU
-#endif
+    ISA_AVX2 void inverse_diagonal_avx2(std::vector<T> &out, std::exception_ptr &err) const {
+        inverse_diagonal_body(out, err);
+    }
+    ISA_BASELINE void inverse_diagonal_baseline(std::vector<T> &out, std::exception_ptr &err) const {
+        inverse_diagonal_body(out, err);
+    }
     void inverse_diagonal_kernel(std::vector<T> &out, std::exception_ptr &err) const {
+        if (isa::avx2()) inverse_diagonal_avx2(out, err); else inverse_diagonal_baseline(out, err);
+    }
+    ISA_BODY void inverse_diagonal_body(std::vector<T> &out, std::exception_ptr &err) const {
         try {
         const Symbolic &s = *S;
         std::vector<T> diag(s.n);
@@ -878,6 +925,9 @@ NB_MODULE(_ldlt, mod) {
     mod.def("set_blas_min_work", [](double w) { double old = blas::min_work; blas::min_work = w; return old; },
             nb::arg("work"), "Multiply-adds from which a dense block goes to BLAS (returns the previous value).");
     mod.def("blas_ready", &blas::ready);
+    mod.def("kernel_isa", [] { return isa::avx2() ? "avx2" : "baseline"; },
+            "Instruction set of the kernels in use: 'avx2', or 'baseline' (no AVX2 on this CPU, "
+            "another compiler, or SPECTRAL_IGL_BASELINE=1).");
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["Pattern", "LDLT", "available", "nested_dissection", "minimum_degree", "ORDERINGS"]
+__all__ = ["Pattern", "LDLT", "available", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
 
 ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
 
@@ -67,6 +67,17 @@ def available() -> bool:
     except ImportError:
         return False
     return True
+
+
+def kernel_isa() -> str:
+    """Instruction set of the compiled kernels in use: ``"avx2"``, or ``"baseline"``.
+
+    The factorization, solves and selected inversion are compiled for AVX2 and for the
+    x86-64 baseline and chosen at run time by the CPU; ``SPECTRAL_IGL_BASELINE=1`` in the
+    environment (read once, at the first call) forces the baseline, to test on one
+    machine what machines without AVX2 compute.
+    """
+    return _ext().kernel_isa()
 
 
 def _symmetric_csc(A) -> sp.csc_matrix:
