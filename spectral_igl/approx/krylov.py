@@ -215,8 +215,10 @@ class ShiftInvertPlan:
         return base
 
     def _logmax(self, gam, lo, hi, divide=False):
-        r"""For the heat filter, log of a bound of :math:`|g|` (or :math:`|g(y)/y|`) on the
-        Bernstein ellipse :math:`E_\rho` of [lo, hi]; None for other filters.
+        r"""For the heat and Mexican-hat (``t s e^{-ts}``) filters, log of a bound of :math:`|g|`
+        (or :math:`|g(y)/y|`) on the Bernstein ellipse :math:`E_\rho` of [lo, hi]; None for
+        other filters. For the Mexican hat, :math:`g(y) = q(1/y - 1)e^{-q(1/y - 1)}` adds
+        :math:`\log q + \log(1 + 1/\min|y|)` to the heat's bound.
 
         :math:`|g(y)| = e^{q(1 - \mathrm{Re}(1/y))}` with :math:`q = t/\gamma`. On
         :math:`y = c + A u + iB\sqrt{1-u^2}`, :math:`\mathrm{Re}(1/y) = (c + Au)/Q(u)` with the
@@ -225,8 +227,9 @@ class ShiftInvertPlan:
         :math:`Ad^2u^2 + 2cd^2u + A(c^2 - B^2)` (the zero of the derivative): exact, no sampling.
         Only ellipses with y = 0 outside (c - A > 0) are used.
         """
-        if self.filt.kind != "heat":
+        if self.filt.kind not in ("heat", "mexican_hat"):
             return None
+        mexican = self.filt.kind == "mexican_hat"
         q = self.filt.params["t"] / gam
         c, d = 0.5 * (lo + hi), 0.5 * (hi - lo)
 
@@ -251,6 +254,8 @@ class ShiftInvertPlan:
                 return np.inf
             fmin = float(np.min((c + A * us) / Q(us)))
             val = q * (1.0 - fmin)
+            if mexican:    # |q (1/y - 1)| <= q (1 / |y| + 1) times the heat's factor
+                val += np.log(q) + np.log1p(1.0 / np.sqrt(qmin))
             if divide:
                 val -= 0.5 * np.log(qmin)
             return val * (1.0 + 1e-12) + 1e-12 * (1.0 + q)
