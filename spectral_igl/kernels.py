@@ -12,11 +12,12 @@ spectral engine (:class:`spectral_igl.SpectralOperator`), with its certified err
 from __future__ import annotations
 
 import numbers
+import warnings
 
 import numpy as np
 
 from .accuracy import info as make_info
-from .accuracy import relative_error, warn_missed, weakest
+from .accuracy import AccuracyWarning, relative_error, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_positive, as_tol, check_dense_size
 from .approx import spectral_operator
 from .approx.uniformization import metzler_heat, products_needed
@@ -84,6 +85,9 @@ FLOOR = 1e-10
 TIGHTEST = 1e-13
 #: sparse products per block of columns that the cancellation-free heat path may take
 MAX_PRODUCTS = 20000
+#: up to this many products (each about 1/400 of a Cholesky of the same size), ``rtol`` heat
+#: columns go straight to the cancellation-free path instead of trying the rational one first
+DIRECT_PRODUCTS = 400
 
 
 def _column_info(lap, filt, K, bnorm, kind, method, tol):
@@ -115,10 +119,40 @@ def _misses(K, info, rtol, floor):
     return bad, np.min(allowed, axis=0)
 
 
+def _uniform_tail(lap, idx, rtol, floor):
+    """Truncation of the uniformization well below rtol * floor * peak, with peak >= 1 / area
+    (heat is conserved) and the largest input 1 / m_i."""
+    return 1e-3 * rtol * floor * float(np.min(lap.mass[idx])) / lap.area() if floor > 0 else 1e-300
+
+
+def _uniformized(lap, t, idx, tol, rtol, floor):
+    """Heat columns by the cancellation-free uniformization, with their ``info``."""
+    tail = _uniform_tail(lap, idx, rtol, floor)
+    G = np.zeros((lap.n, idx.size))
+    G[idx, np.arange(idx.size)] = 1.0 / lap.mass[idx]
+    U, err = metzler_heat(lap, t, G, tail)
+    rel = relative_error(U, err)
+    work = products_needed(lap, t, tail)
+    if np.any((U >= floor * U.max(axis=0)[None, :]) & ~(rel <= rtol)):
+        raise ValueError(f"rtol={rtol:g}: not reached even without cancellation (rounding of "
+                         f"{work} sparse products); ask for a larger rtol")
+    return U, make_info(err, "proof", "uniformization", tol=tol, rtol=rtol, floor=floor, rel_error=rel,
+                        bnorm_error=np.full(idx.size, np.nan), products=work)
+
+
 def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
     """Kernel columns with every entry above ``floor`` of its column's peak proved within
     ``rtol`` of the truth, or a ValueError saying why not."""
-    K, bnorm = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol, return_bound=True)
+    uniform = method == "auto" and filt.kind == "heat" and delta == "mass" and lap.is_metzler
+    if uniform:
+        work = products_needed(lap, filt.params["t"], _uniform_tail(lap, idx, rtol, floor))
+        # straight to the only path that reaches far entries when it is cheaper than a rational
+        # column, or when no B-norm accuracy can reach them (|e_j| >= TIGHTEST |delta|_B / ...)
+        if work <= DIRECT_PRODUCTS or (work <= MAX_PRODUCTS and rtol * floor < TIGHTEST):
+            return _uniformized(lap, filt.params["t"], idx, tol, rtol, floor)
+    with warnings.catch_warnings():   # a missed tol here is judged by rtol below, not reported
+        warnings.simplefilter("ignore", AccuracyWarning)
+        K, bnorm = kernel_columns(lap, filt, idx, delta=delta, method=method, tol=tol, return_bound=True)
     op = spectral_operator(lap, filt, method, tol)
     K, info = _column_info(lap, filt, K, bnorm, op.bound_kind, op.method, tol)
     if info["bound_kind"] != "proof":
@@ -132,24 +166,10 @@ def _entrywise(lap, filt, idx, delta, method, tol, rtol, floor):
     want = float(np.min(0.5 * allowed[bad] / np.maximum(norms[bad], np.finfo(float).tiny)))
     if method == "auto" and want >= TIGHTEST:
         return _entrywise(lap, filt, idx, delta, method, want, rtol, floor)
-    if method == "auto" and filt.kind == "heat" and delta == "mass" and lap.is_metzler:
-        t = filt.params["t"]
-        # truncation well below rtol * floor * peak, with peak >= 1 / area (heat is conserved)
-        # and max G = 1 / m_i
-        tail = 1e-3 * rtol * floor * float(np.min(lap.mass[idx])) / lap.area() if floor > 0 else 1e-300
-        work = products_needed(lap, t, tail)
+    if uniform:
         if work <= MAX_PRODUCTS:
-            G = np.zeros((lap.n, idx.size))
-            G[idx, np.arange(idx.size)] = 1.0 / lap.mass[idx]
-            U, err = metzler_heat(lap, t, G, tail)
-            rel = relative_error(U, err)
-            out = make_info(err, "proof", "uniformization", tol=tol, rtol=rtol, floor=floor,
-                                rel_error=rel, bnorm_error=np.full(idx.size, np.nan), products=work)
-            if np.any((U >= floor * U.max(axis=0)[None, :]) & ~(rel <= rtol)):
-                raise ValueError(f"rtol={rtol:g}: not reached even without cancellation (rounding of "
-                                 f"{work} sparse products); ask for a larger rtol")
-            return U, out
-        why = (f"the cancellation-free evaluation needs {work} sparse products at t={t:g} "
+            return _uniformized(lap, filt.params["t"], idx, want, rtol, floor)
+        why = (f"the cancellation-free evaluation needs {work} sparse products at t={filt.params['t']:g} "
                f"(more than {MAX_PRODUCTS}: a large t, or elements that make lambda_max large)")
     elif method != "auto":
         why = f"method={method!r} was asked for; method='auto' tightens tol or avoids cancellation"
