@@ -111,10 +111,10 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     - :math:`s^{-k/2}` (biharmonic, commute-time, poly-harmonic): ``"rational"`` (exact
       pseudo-solves, plus a real-pole rational fit of :math:`s^{-1/2}` for odd k);
     - wave: ``"chebyshev"``;
-    - any other filter: the cheaper of ``"chebyshev"`` and ``"shift_invert"`` by a cost model in
-      units of one solve (a factorization counts as 25 solves, a lumped-mass Chebyshev step as
-      0.2), unless only the other one proves its bound at ``tol`` and costs at most
-      :data:`PROOF_PREMIUM` times as much.
+    - any other filter: of ``"chebyshev"`` and ``"shift_invert"``, those that reach ``tol`` (both
+      if neither does), the cheaper by a cost model in units of one solve (a factorization counts
+      as 25 solves, a lumped-mass Chebyshev step as 0.2), unless only the other one proves its
+      bound and costs at most :data:`PROOF_PREMIUM` times as much.
     """
     if filt.kind == "heat":
         return "rational"
@@ -135,12 +135,14 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     ch = ChebyshevPlan(lap, filt, a, b, tol, max_degree=20000)
     cost_ch = (0.0 if lap.lumped else 25.0) + ch.m * (0.2 if lap.lumped else 1.0)
     proved_ch = getattr(ch, "proved", False) and ch.scalar_error <= tol
-    # a method that proves its bound wherever it costs at most PROOF_PREMIUM times the other
-    cands = sorted([(cost_ch, not proved_ch, "chebyshev"), (cost_si, not proved_si, "shift_invert")])
-    cheap, other = cands
-    if cheap[1] and not other[1] and other[0] <= PROOF_PREMIUM * cheap[0]:
-        return other[2]
-    return cheap[2]
+    # only methods that reach tol (if any does); among them the cheapest, or one that proves its
+    # bound for at most PROOF_PREMIUM times the cost
+    cands = [(cost_ch, proved_ch, ch.scalar_error <= tol, "chebyshev"),
+             (cost_si, proved_si, np.isfinite(cost_si) and si.scalar_error <= tol, "shift_invert")]
+    cands = sorted(c for c in cands if c[2]) or sorted(cands)
+    cheap = cands[0]
+    proving = [c for c in cands if c[1] and c[0] <= PROOF_PREMIUM * cheap[0]]
+    return (proving[0] if proving and not cheap[1] else cheap)[3]
 
 
 #: the method settings :class:`SpectralOperator` takes: name -> (methods that read it, range)
