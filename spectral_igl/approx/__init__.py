@@ -110,7 +110,8 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     - a user filter (whose error no method can prove) on a tiny problem (n <= 300): ``"dense"``;
     - :math:`s^{-k/2}` (biharmonic, commute-time, poly-harmonic): ``"rational"`` (exact
       pseudo-solves, plus a real-pole rational fit of :math:`s^{-1/2}` for odd k);
-    - wave: ``"chebyshev"``;
+    - wave: ``"chebyshev"``, or ``"rational"`` (an AAA fit, proved) where the Chebyshev series
+      would need more than 20,000 steps and the fit reaches ``tol``;
     - any other filter: of ``"chebyshev"`` and ``"shift_invert"``, those that reach ``tol`` (both
       if neither does), the cheaper by a cost model in units of one solve (a factorization counts
       as 25 solves, a lumped-mass Chebyshev step as 0.2), unless only the other one proves its
@@ -123,7 +124,7 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     if filt.kind == "power":
         return "rational"
     if filt.kind == "wave":
-        return "chebyshev"
+        return _wave_method(lap, filt, tol)
     a = lambda_min_positive(lap) if filt.singular else 0.0
     b = lambda_max(lap)
     try:
@@ -143,6 +144,21 @@ def choose_method(lap: Laplacian, filt: Filter, tol: float = 1e-8) -> str:
     cheap = cands[0]
     proving = [c for c in cands if c[1] and c[0] <= PROOF_PREMIUM * cheap[0]]
     return (proving[0] if proving and not cheap[1] else cheap)[3]
+
+
+def _wave_method(lap, filt, tol):
+    """``"chebyshev"`` when its series reaches tol within 20,000 steps (t * lambda_max up to about
+    1e4), else the rational (AAA) fit where that reaches tol, else ``"chebyshev"`` (which then
+    reports the bound it reaches)."""
+    b = lambda_max(lap)
+    if ChebyshevPlan(lap, filt, 0.0, b, tol, max_degree=20000).scalar_error <= tol:
+        return "chebyshev"
+    try:
+        rat = RationalPlan(lap, filt, 0.0, b, tol)
+    except (ValueError, RuntimeError, ArithmeticError) as exc:
+        log.debug("rational not usable for %r: %s", filt, exc)
+        return "chebyshev"
+    return "rational" if rat.scalar_error + rat.rounding <= tol else "chebyshev"
 
 
 #: the method settings :class:`SpectralOperator` takes: name -> (methods that read it, range)
