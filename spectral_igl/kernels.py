@@ -311,7 +311,9 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     if rtol is None and block_sources(lap, method, delta, idx.size):
         lap.warn_if_not_metzler("heat kernel")
         K, info = heat_kernels(lap, [t], idx, tol=tol, return_info=True)
-        K, info = K[:, :, 0], {k: (v[..., 0] if isinstance(v, np.ndarray) and v.ndim == 3 else v)
+        # one time: drop the trailing time axis of every per-time entry
+        K, info = K[:, :, 0], {k: (v[..., 0] if isinstance(v, np.ndarray) and v.ndim >= 2 else
+                                   (float(v[0]) if isinstance(v, np.ndarray) and v.shape == (1,) else v))
                                for k, v in info.items()}
         return (K, info) if as_flag(return_info, "return_info") else K
     return _kernel(lap, heat(t), sources, delta, method, tol, return_info, rtol, floor)

@@ -35,6 +35,7 @@ small t, expensive where one poorly shaped element makes :math:`\alpha` large.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import scipy.sparse as sp
@@ -47,6 +48,8 @@ STEP = 512.0
 #: default bound of the truncated Poisson tails (all steps), relative to each column's maximum
 TAIL = 1e-32
 U = 2.0 ** -53
+#: t * alpha beyond which the step count is not even formed
+MAX_RATE_TIME = 1e12
 
 
 def _gamma(k):
@@ -95,6 +98,8 @@ def products_needed(lap, t: float, tail: float = TAIL) -> int:
     alpha, _ = _rate(lap)
     if alpha == 0:
         return 0
+    if not t * alpha <= MAX_RATE_TIME:          # inf included: far beyond any budget
+        return sys.maxsize
     s, lam = _steps(t, alpha)
     return s * _terms(lam, tail / s)[0]
 
@@ -130,6 +135,9 @@ def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
     if alpha == 0 or t == 0:
         err = np.zeros_like(V)
         return (V[:, 0], err[:, 0]) if one else (V, err)
+    if not t * alpha <= MAX_RATE_TIME:
+        raise ValueError(f"t * alpha = {t * alpha:.3g}: uniformization would take more than "
+                         f"{MAX_RATE_TIME:.0e} sparse products")
     s, lam = _steps(t, alpha)
     K, step_tail = _terms(lam, tail / s)
     r = int(np.max(np.diff(P.indptr)))
