@@ -219,3 +219,26 @@ def test_many_sources_carry_entry_bounds():
         ref = X @ (np.exp(-t * ev)[:, None] * X[src].T)
         assert np.all(np.abs(K[:, :, a] - ref) <= info["abs_error"][:, :, a])
     assert info["bound_kind"] == "proof"
+
+
+@pytest.mark.parametrize("tol", [1e-8, 1e-11])
+def test_full_mass_column_warns_whenever_its_bound_exceeds_tol_times_the_true_norm(tol):
+    """The check once compared with an upper bound of ||B^-1 e_i||_B (twice the true norm for a
+    full triangle mass), so a column 1.3 times over tol passed silently."""
+    import scipy.sparse.linalg as spla
+
+    lap = sig.laplacian(*icosphere(3), mass="full")
+    e = np.zeros(lap.n)
+    e[11] = 1.0
+    x = spla.spsolve(lap.B.tocsc(), e)
+    true_norm = float(np.sqrt(x @ (lap.B @ x)))
+    for s in (0.1, 1.0, 10.0):
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            _, info = sig.heat_kernel(lap, s * lap.area(), 11, tol=tol, return_info=True)
+        warned = any(issubclass(w.category, AccuracyWarning) for w in rec)
+        if info["bnorm_error"] > tol * true_norm:
+            assert warned, (s, info["bnorm_error"], tol * true_norm)
+    # at the default tol the plan targets tol sqrt(c), so the bound meets tol and nothing warns
+    if tol == 1e-8:
+        assert info["bnorm_error"] <= tol * true_norm and not warned

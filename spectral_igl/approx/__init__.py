@@ -58,7 +58,7 @@ import scipy.sparse.linalg as spla
 from ..accuracy import warn_missed
 from .._validate import as_int, as_positive, as_signal, as_tol, check_spectral_function
 from ..filters import Filter, as_filter
-from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind
+from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
 from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
 from .common import (EPS, abs_bnorm, abs_mass_apply, bnorm, filter_sup, inv_bnorm_upper, mass_rounding,
                      projection_rounding)
@@ -288,10 +288,10 @@ class SpectralOperator(spla.LinearOperator):
             kwargs["backend"] = backend
         self.plan = None
         if self.split:
-            self.plan = ZeroPlan.attempt(filt, self.a, self.lambda_max, tol)
+            self.plan = ZeroPlan.attempt(filt, self.a, self.lambda_max, self._plan_tol())
         if self.plan is None:
             try:
-                self.plan = _PLANS[method](lap, filt, self.a, self.lambda_max, tol, **kwargs)
+                self.plan = _PLANS[method](lap, filt, self.a, self.lambda_max, self._plan_tol(), **kwargs)
             except TypeError as err:
                 raise TypeError(f"invalid options for method {method!r}: {sorted(options)} ({err})") from err
         self.phi0 = filt.at_zero()
@@ -374,12 +374,34 @@ class SpectralOperator(spla.LinearOperator):
         self._check_tol(g, rhs=True)
         return u
 
+    def _plan_tol(self):
+        r"""The scalar target of the plans: ``tol``, times :math:`\sqrt c` for a non-diagonal B.
+
+        A kernel column's bound is the scalar error times :func:`.common.inv_bnorm_upper`
+        :math:`= (g^\top D^{-1}g / c)^{1/2}`, which exceeds :math:`\|B^{-1}g\|_B \ge
+        (g^\top D^{-1}g)^{1/2}` (B entrywise non-negative, D its row sums) by up to
+        :math:`1/\sqrt c`; the factor keeps the bound within ``tol`` times the true norm."""
+        lap = self.lap
+        if lap.lumped or not (lap.B.data >= 0).all():
+            return self.tol
+        return self.tol * float(np.sqrt(mass_ratio(lap)))
+
     def _check_tol(self, f, rhs):
-        """Warn, naming the achieved bound, when the bound of the last call misses ``tol``."""
+        """Warn, naming the achieved bound, when the bound of the last call misses ``tol`` times
+        the input's norm (for a kernel column a lower bound of :math:`\|B^{-1}g\|_B`:
+        :math:`(g^\top D^{-1}g)^{1/2}` when B is entrywise non-negative, since then
+        :math:`D^{-1}B` has spectral radius 1)."""
         if self.error_bound is None:
             return
         f = np.asarray(f)
-        norm = inv_bnorm_upper(self.lap, f) if rhs else bnorm(self.lap, f)
+        lap = self.lap
+        if not rhs:
+            norm = bnorm(lap, f)
+        elif lap.lumped or (lap.B.data >= 0).all():
+            d = lap.mass if f.ndim == 1 else lap.mass[:, None]
+            norm = np.sqrt(np.real(np.sum(np.abs(f) ** 2 / d, axis=0)))
+        else:
+            norm = inv_bnorm_upper(lap, f)
         warn_missed(f"{self!r}", self.error_bound, self.tol * norm, stacklevel=4)
 
     def _apply(self, f, rhs):
