@@ -60,8 +60,8 @@ from .._validate import as_int, as_positive, as_signal, as_tol, check_spectral_f
 from ..filters import Filter, as_filter
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
 from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
-from .common import (EPS, abs_bnorm, abs_mass_apply, bnorm, filter_sup, inv_bnorm_upper, mass_rounding,
-                     projection_rounding)
+from .common import (EPS, abs_bnorm, abs_mass_apply, bnorm, filter_sup, inv_bnorm_lower, inv_bnorm_upper,
+                     mass_rounding, nonnegative_mass, projection_rounding)
 from .contour import ContourPlan
 from .krylov import KrylovPlan, ShiftInvertPlan
 from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
@@ -382,7 +382,7 @@ class SpectralOperator(spla.LinearOperator):
         (g^\top D^{-1}g)^{1/2}` (B entrywise non-negative, D its row sums) by up to
         :math:`1/\sqrt c`; the factor keeps the bound within ``tol`` times the true norm."""
         lap = self.lap
-        if lap.lumped or not (lap.B.data >= 0).all():
+        if lap.lumped or not nonnegative_mass(lap):
             return self.tol
         return self.tol * float(np.sqrt(mass_ratio(lap)))
 
@@ -395,12 +395,8 @@ class SpectralOperator(spla.LinearOperator):
             return
         f = np.asarray(f)
         lap = self.lap
-        if not rhs:
-            norm = bnorm(lap, f)
-        elif lap.lumped or (lap.B.data >= 0).all():
-            d = lap.mass if f.ndim == 1 else lap.mass[:, None]
-            norm = np.sqrt(np.real(np.sum(np.abs(f) ** 2 / d, axis=0)))
-        else:
+        norm = bnorm(lap, f) if not rhs else inv_bnorm_lower(lap, f)
+        if norm is None:
             norm = inv_bnorm_upper(lap, f)
         warn_missed(f"{self!r}", self.error_bound, self.tol * norm, stacklevel=4)
 

@@ -138,6 +138,24 @@ def filter_sup(filt, a: float, b: float, target: float = 0.0):
         return sup_error(filt, a, b, n=500), False
 
 
+def inv_bnorm_lower(lap: Laplacian, g: np.ndarray) -> np.ndarray:
+    r"""Lower bound of :math:`\|B^{-1}g\|_B` without a solve, or None.
+
+    For B entrywise non-negative with row sums D, :math:`D^{-1}B` is stochastic, so
+    :math:`B \le D` in the Loewner order (spectral radius 1) and
+    :math:`g^*B^{-1}g \ge g^*D^{-1}g`. None for a B with negative entries.
+    """
+    if not nonnegative_mass(lap):
+        return None
+    d = lap.mass if g.ndim == 1 else lap.mass[:, None]
+    return np.sqrt(np.real(np.sum(np.abs(g) ** 2 / d, axis=0)))
+
+
+def nonnegative_mass(lap: Laplacian) -> bool:
+    """Whether B is entrywise non-negative (every lumped and linear-FEM mass), cached."""
+    return lap.cache.fetch("bound", "nonnegative_mass", lambda: bool(lap.lumped or (lap.B.data >= 0).all()))
+
+
 # ----------------------------------------------------------------------------- certified sup
 def sample_grid(a: float, b: float, n: int = 6000) -> np.ndarray:
     """Sorted sample points of [a, b]: linear, geometric from a (or from 1e-14 b) and Chebyshev."""

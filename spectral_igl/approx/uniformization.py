@@ -57,17 +57,21 @@ def _gamma(k):
 
 
 def _rate(lap):
-    """(alpha, P) with alpha = 17/16 max_j A_jj and P = I - A/alpha >= 0 (P_jj >= 1/17)."""
-    L = sp.csr_matrix(lap.L, dtype=float)
-    d = L.diagonal() / lap.mass
-    top = float(np.max(d)) if d.size else 0.0
-    if not top > 0:
-        return 0.0, None
-    alpha = 1.0625 * top
-    P = sp.csr_matrix(sp.diags(-1.0 / (lap.mass * alpha)) @ L)
-    P.setdiag(1.0 - d / alpha)
-    P.eliminate_zeros()
-    return alpha, P
+    """(alpha, P) with alpha = 17/16 max_j A_jj and P = I - A/alpha >= 0 (P_jj >= 1/17),
+    cached on ``lap``."""
+    def build():
+        L = sp.csr_matrix(lap.L, dtype=float)
+        d = L.diagonal() / lap.mass
+        top = float(np.max(d)) if d.size else 0.0
+        if not top > 0:
+            return 0.0, None
+        alpha = 1.0625 * top
+        P = sp.csr_matrix(sp.diags(-1.0 / (lap.mass * alpha)) @ L)
+        P.setdiag(1.0 - d / alpha)
+        P.eliminate_zeros()
+        return alpha, P
+
+    return lap.cache.fetch("bound", "uniformization", build)
 
 
 def _terms(lam, tail):

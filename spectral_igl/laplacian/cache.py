@@ -20,7 +20,8 @@ log = logging.getLogger(__name__)
 #: slot name -> (what it holds, most entries kept; None = unbounded). Least recently used
 #: entries are evicted first.
 SLOTS = {
-    "bound": ("spectral bounds: lambda_max, lambda_min_positive, mass_ratio", None),
+    "bound": ("spectral bounds: lambda_max, lambda_min_positive, mass_ratio, the uniformization "
+              "rate and its stochastic matrix", None),
     "basis": ("B-orthonormal basis of ker L (one indicator per component)", None),
     "factor": ("factorizations of theta B + beta L and of the grounded stiffness", 24),
     "pattern": ("ordering and symbolic LDLT analysis of the pattern of L + B", None),
