@@ -249,8 +249,9 @@ def build_parser():
     p.add_argument("--count", type=_positive_int, default=5,
                    help="number of times of the default grid (default 5)")
     p.add_argument("--normalize", action=argparse.BooleanOptionalAction, default=True,
-                   help="multiply by the shape's area (volume): dimensionless, comparable across "
-                        "shapes of any size (default on; --no-normalize gives K_t(i, i) as is)")
+                   help="multiply by the area (volume) of the vertex's component: dimensionless, "
+                        "comparable across shapes of any size (default on; --no-normalize gives "
+                        "K_t(i, i) as is)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
@@ -698,8 +699,8 @@ def _batch_arguments(sub):
     p.add_argument("--count", type=_positive_int, default=100,
                    help="hks: number of times of the default grid (default 100)")
     p.add_argument("--normalize", action=argparse.BooleanOptionalAction, default=True,
-                   help="hks: multiply by each shape's area (volume), so that shapes of different "
-                        "sizes compare (default on)")
+                   help="hks: multiply by the area (volume) of each vertex's component, so that "
+                        "shapes of different sizes compare (default on)")
     p.add_argument("--energies", type=float, nargs="+",
                    help="wks: log-energies (default: 100 from each shape's own spectrum)")
     p.add_argument("--sigma", type=_positive, default=None, help="wks: band width")

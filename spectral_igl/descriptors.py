@@ -198,10 +198,11 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
         ``"shape"`` (x area on surfaces, x volume\ :sup:`2/3` on solids), ``"area"``,
         ``"volume"``, ``"h2"``. ``info["times"]`` holds the absolute times used.
     normalize : bool
-        Multiply by the shape's measure (area or volume): a dimensionless HKS that tends to 1
-        at large t on a connected shape and, at times in the shape's units (or on the default
-        grid), does not change when the shape is scaled, so that shapes of different sizes
-        compare.
+        Multiply by the measure (area or volume) of the vertex's connected component, the
+        shape's measure on a connected shape: a dimensionless HKS that tends to 1 at large t on
+        every component (an unreferenced vertex is its own component: 1 at every t) and, at
+        times in the shape's units (or on the default grid), does not change when the shape is
+        scaled, so that shapes of different sizes compare.
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
@@ -218,7 +219,7 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
-    scale = lap.area() if as_flag(normalize, "normalize") else 1.0
+    normalize = as_flag(normalize, "normalize")
     if times is None:
         if time_unit != "absolute":
             raise ValueError(f"time_unit={time_unit!r} applies to times, which were not given (the "
@@ -228,10 +229,11 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
     Tv = T.reshape(-1)
     out, info = _hks(lap, T, Tv, method, progress, kwargs)
     info["times"] = Tv.copy()
-    if scale != 1.0:
+    if normalize:        # the measure of each vertex's component: 1 at large t on every component
+        scale = lap.component_volume() if out.ndim == 1 else lap.component_volume()[:, None]
         out = out * scale
         info["abs_error"] = info["abs_error"] * scale * (1.0 + 2.0 * EPS) + EPS * np.abs(out)
-        info["normalized_by"] = scale
+        info["normalized_by"] = "component measure"
     return (out, info) if return_info else out
 
 

@@ -150,7 +150,7 @@ class Job:
         ``times`` in the units ``time_unit`` (:mod:`spectral_igl.laplacian.units`); without
         them, ``count`` times from each shape's own spectrum (:func:`spectral_igl.hks_times`),
         so that a shape and its scaled copy get the same relative grid. ``normalize``
-        multiplies by each shape's area (volume): with either of the two, HKS of shapes of
+        multiplies by the area (volume) of each vertex's component: with the two, HKS of shapes of
         different sizes compare. Stores ``"hks"``: (n, len(times)) float, its per-entry
         bound ``"hks_abs_error"`` and the largest bound of each time, ``abs_error_bound``,
         and records ``time_unit``, ``time_scale`` (the factor it stood for on that shape)
