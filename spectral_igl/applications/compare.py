@@ -96,7 +96,8 @@ def shape_dna(lap, k: int = 50, normalize: str | None = "shape", return_info: bo
     lam = np.asarray(lam, dtype=float)
     values = lam * scale
     err = np.asarray(eig_info["abs_error"], dtype=float) * scale * (1 + EPS)
-    err = err + _gamma(lap.B.nnz + 4) * np.abs(values)
+    # s is a sum over B's entries (area) or over the edges (h2), and a power of it
+    err = err + _gamma(max(lap.B.nnz, lap.L.nnz) + 8) * np.abs(values)
     if not as_flag(return_info, "return_info"):
         return values
     return values, bound_info(err, eig_info["bound_kind"], "eigs", scale=scale, normalize=unit)
@@ -214,14 +215,16 @@ def _features(values, signature):
 
 
 def _feature_error(values, abs_error, signature):
-    """A bound of the error of each feature from the bound of each signature entry."""
+    """A bound of the error of each computed feature from the bound of each signature entry,
+    with the rounding of the feature itself (a log or a division: a few units of it)."""
     v, e = np.asarray(values, dtype=float), np.asarray(abs_error, dtype=float)
+    rounding = 4 * EPS * np.abs(_features(v, signature))
     if signature == "heat_trace":
         with np.errstate(divide="ignore", invalid="ignore"):
             # |log Z - log Z~| <= -log(1 - e / Z~) while e < Z~
             out = np.where(e < v, -np.log1p(-np.minimum(e / v, 1.0)), np.inf)
-        return out / np.sqrt(v.size)
-    return e[1:] / np.arange(1, v.size)
+        return out / np.sqrt(v.size) * (1 + 4 * EPS) + rounding
+    return e[1:] / np.arange(1, v.size) * (1 + 2 * EPS) + rounding
 
 
 def _check_signature(signature):
