@@ -22,9 +22,13 @@ from .applications import (
                            feature_points,
                            geodesic_distance,
                            harmonic,
+                           heat_trace,
                            mean_curvature_flow,
                            optimal_time,
                            schrodinger,
+                           shape_distance,
+                           shape_distance_matrix,
+                           shape_dna,
                            smooth,
                            smooth_constrained,
                            optimal_shape_time,
@@ -102,7 +106,8 @@ __all__ = [
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
-    "schrodinger", "mean_curvature_flow",
+    "schrodinger", "mean_curvature_flow", "shape_dna", "heat_trace", "shape_distance",
+    "shape_distance_matrix",
 ]
 
 # --- collection ---

@@ -106,7 +106,8 @@ class Job:
     """One computation applied to every shape of a collection.
 
     Build it with a constructor: :meth:`hks`, :meth:`wks`, :meth:`kernel_diagonal`,
-    :meth:`distances`, :meth:`eigenvalues` or :meth:`function`. Calling the job on
+    :meth:`distances`, :meth:`eigenvalues`, :meth:`heat_trace`, :meth:`shape_dna` or
+    :meth:`function`. Calling the job on
     ``(name, lap)`` returns ``(arrays, bounds)``: a dict of named arrays (``(n, ...)`` per
     vertex) with, next to the result ``<key>``, its per-entry bound ``<key>_abs_error``
     (:mod:`spectral_igl.accuracy`), and a dict of JSON values: ``of`` (the bounded result),
@@ -231,6 +232,30 @@ class Job:
         return cls("eigenvalues", {"k": int(k)})
 
     @classmethod
+    def heat_trace(cls, times=None, time_unit: str = "shape", tol: float = 1e-8):
+        r"""The heat trace :math:`Z(t) = \sum_l e^{-t\lambda_l}` (:func:`spectral_igl.heat_trace`).
+
+        ``times`` in the units ``time_unit``; without them the common grid
+        :data:`spectral_igl.applications.compare.TRACE_TIMES` in the shape's units, so that
+        the stored traces compare (:func:`spectral_igl.shape_distance_matrix`). Stores
+        ``"heat_trace"``: (T,) float, its bound ``"heat_trace_abs_error"`` and ``"times"``
+        (absolute).
+        """
+        params = {"times": None if times is None else _floats(times, "times"), "tol": as_positive(tol, "tol")}
+        params["time_unit"] = as_choice(time_unit, "time_unit", TIME_UNITS)
+        return cls("heat_trace", params)
+
+    @classmethod
+    def shape_dna(cls, k: int = 50, normalize: str | None = "shape"):
+        """ShapeDNA: the first ``k`` certified eigenvalues times the shape's measure
+        (:func:`spectral_igl.shape_dna`). Stores ``"shape_dna"``: (k,) float and its bound
+        ``"shape_dna_abs_error"``.
+        """
+        if normalize is not None:
+            normalize = as_choice(normalize, "normalize", tuple(u for u in TIME_UNITS if u != "absolute"))
+        return cls("shape_dna", {"k": as_int(k, "k", lo=1), "normalize": normalize})
+
+    @classmethod
     def function(cls, fn, params: dict | None = None, name: str | None = None):
         """Any function ``fn(name, lap)`` returning an array or a dict of arrays.
 
@@ -257,7 +282,7 @@ class Job:
 
     def uses_selected_inverse(self) -> bool:
         """True when the job factorizes shifted complex matrices (memory estimate)."""
-        if self.kind in ("hks", "kernel_diagonal", "distances"):
+        if self.kind in ("hks", "kernel_diagonal", "distances", "heat_trace"):
             return True
         return self.kind == "wks" and self.params.get("method") != "eigen"
 
@@ -306,6 +331,8 @@ class Job:
             return _bounded({"distances": np.stack(rows), "sources": np.asarray(p["sources"], dtype=np.int64)},
                             "distances", np.stack(errs), weakest(*kinds), info["method"],
                             d2_error_bound=d2, **extra)
+        if self.kind in ("heat_trace", "shape_dna"):
+            return _signature(self.kind, lap, p)
         if self.kind == "eigenvalues":
             from ..linalg import dense_eigs, eigs
 
@@ -332,6 +359,20 @@ class Job:
 def _note(info):
     """The ``note`` of an ``info`` dict, if it has one, as keyword arguments."""
     return {"note": info["note"]} if info.get("note") else {}
+
+
+def _signature(kind, lap, p):
+    """``(arrays, bounds)`` of :meth:`Job.heat_trace` or :meth:`Job.shape_dna`."""
+    from ..applications.compare import heat_trace, shape_dna
+
+    if kind == "shape_dna":
+        v, info = shape_dna(lap, p["k"], normalize=p["normalize"], return_info=True)
+        return _bounded({"shape_dna": v}, "shape_dna", info["abs_error"], info["bound_kind"],
+                        info["method"], scale=info["scale"], normalize=info["normalize"])
+    v, info = heat_trace(lap, p["times"], time_unit=p["time_unit"], tol=p["tol"], return_info=True)
+    return _bounded({"heat_trace": np.atleast_1d(v), "times": info["times"]}, "heat_trace",
+                    np.atleast_1d(info["abs_error"]), info["bound_kind"], info["method"],
+                    **_time_record(lap, p, info["times"]), **_note(info))
 
 
 def _distance(lap, p, s):
