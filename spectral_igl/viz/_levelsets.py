@@ -6,7 +6,7 @@ import numpy as np
 from ._backend import (CRITICAL_COLORS, KINDS, NEUTRAL_COLOR, color_kind, colormap, headless, pyvista,
                        save_png, to_pyvista)
 from ._camera import fit_view, parse_view, place_camera, view_sees
-from ._scale import SCALES, colour_ticks, use_log_scale
+from ._scale import SCALES, apply_ticks, use_log_scale
 
 __all__ = ["plot_levelsets", "levelset_values", "reached_vertices"]
 
@@ -163,9 +163,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         Colour range; default from ``kind`` and the values of ``f`` on the reached parts
         (of all ``f`` when ``shared_scale``).
     scale : {"auto", "linear", "log"}
-        Colour scale. ``"auto"``: logarithmic for sequential values that are all positive and
-        span more than two decades (``max / min > 100``; an HKS, a heat kernel at a short
-        time), linear otherwise; the colour bar then says "log scale" and the iso-values are
+        Colour scale. ``"auto"``: logarithmic for sequential values (not ``kind="distance"``)
+        that are all positive and span more than two decades (``max / min > 100``; an HKS,
+        a heat kernel at a short time), linear otherwise; the colour bar then says "log scale" and the iso-values are
         geometric. Colour-bar ticks are round values, printed with as many digits as they
         need to differ.
     shared_scale : bool
@@ -298,12 +298,17 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         per_panel = [meaning] * len(values)
     cmaps = [colormap(cmap if cmap is not None else (kind if not known else
                       ("distance" if m == "sequential" else m))) for m in per_panel]
-    # logarithmic colours for positive values spanning decades (one decision per scale)
+    # logarithmic colours for positive values spanning decades (one decision per scale); a
+    # distance is read on a linear scale
+    if kind == "distance":
+        per_meaning, meaning_all = ["distance"] * len(values), "distance"
+    else:
+        per_meaning, meaning_all = per_panel, meaning
     if shared_scale or clim is not None:
         logs = [use_log_scale(np.concatenate([fi[r] for fi, r in zip(values, reached)]), scale,
-                              meaning)] * len(values)
+                              meaning_all)] * len(values)
     else:
-        logs = [use_log_scale(fi[r], scale, m) for fi, r, m in zip(values, reached, per_panel)]
+        logs = [use_log_scale(fi[r], scale, m) for fi, r, m in zip(values, reached, per_meaning)]
     for j, log in enumerate(logs):  # a log scale has no place for values <= 0: grey them
         if log:
             reached[j] = reached[j] & (values[j] > 0)
@@ -448,7 +453,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                              font_size=_font_size(caption, panel))
         view.update(kind=per_panel[j], clim=(lo, hi), log=log, notes=notes)
         if show_bar:
-            view.update(zip(("ticks", "tick_labels"), _set_ticks(plotter, bar_title, lo, hi, log)))
+            bar = plotter.scalar_bars[bar_title] if bar_title in plotter.scalar_bars else None
+            view.update(zip(("ticks", "tick_labels"), apply_ticks(bar, lo, hi, log)))
         views.append(view)
         if zoom is None:  # fill the panel, leaving room for title and bar
             fit_view(plotter, view.pop("points", P), height=0.74 if caption else 0.82,
@@ -490,24 +496,6 @@ def _grey_notes(comp, src, f, ok, log):
                  if np.any(m)]
         notes.append(f"grey: {int(bad.sum())} vertices {' or '.join(kinds)}")
     return notes
-
-
-def _set_ticks(plotter, bar_title, lo, hi, log):
-    """Round colour-bar ticks whose labels differ (:func:`colour_ticks`); (values, labels)."""
-    bar = plotter.scalar_bars[bar_title] if bar_title in plotter.scalar_bars else None
-    ticks, fmt = colour_ticks(lo, hi, log=log)
-    if bar is None:
-        return ticks, [fmt % t for t in ticks]
-    from vtkmodules.vtkCommonCore import vtkDoubleArray
-
-    arr = vtkDoubleArray()
-    for t in ticks:
-        arr.InsertNextValue(float(t))
-    bar.SetUseCustomLabels(True)
-    bar.SetCustomLabels(arr)
-    bar.SetLabelFormat(fmt)
-    bar.SetAnnotationTextScaling(False)
-    return ticks, [fmt % t for t in ticks]
 
 
 def _same_points(a, b):

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LOG_RATIO", "SCALES", "use_log_scale", "colour_ticks"]
+__all__ = ["LOG_RATIO", "SCALES", "use_log_scale", "colour_ticks", "distinct_format", "apply_ticks"]
 
 #: positive data whose largest value exceeds the smallest by more than this factor (two
 #: decades) is drawn on a logarithmic colour scale by default
@@ -115,10 +115,25 @@ def distinct_format(values, least: int = 1, most: int = 15) -> str:
     if 1.0 <= big < 1e5:  # whole numbers in full (10, 20, 30), not 1e+01, 2e+01, 3e+01
         least = max(least, int(np.floor(np.log10(big))) + 1)
     gap = float(np.min(np.diff(values))) if values.size > 1 else abs(float(values[0])) if values.size else 1.0
-    tol = 1e-6 * (gap or 1.0)
+    tol = max(1e-6 * (gap or 1.0), 8.0 * np.finfo(float).eps * big)  # no finer than the floats
     for p in range(least, most + 1):
         fmt = f"%.{p}g"
         labels = [fmt % x for x in values]
         if len(set(labels)) == len(labels) and all(abs(float(t) - x) <= tol for t, x in zip(labels, values)):
             return fmt
     return f"%.{most}g"
+
+
+def apply_ticks(bar, lo, hi, log=False):
+    """Put the ticks of :func:`colour_ticks` on a VTK scalar bar actor; return (values, labels)."""
+    ticks, fmt = colour_ticks(lo, hi, log=log)
+    if bar is not None:
+        from vtkmodules.vtkCommonCore import vtkDoubleArray
+
+        arr = vtkDoubleArray()
+        for t in ticks:
+            arr.InsertNextValue(float(t))
+        bar.SetUseCustomLabels(True)
+        bar.SetCustomLabels(arr)
+        bar.SetLabelFormat(fmt)
+    return ticks, [fmt % t for t in ticks]
