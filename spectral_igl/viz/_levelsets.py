@@ -82,7 +82,8 @@ def reached_vertices(mesh, sources=None):
 
 
 def component_labels(mesh):
-    """Connected component of every vertex, numbered by size (0: the largest).
+    """Connected component of every vertex, numbered by size (0: the largest; equal sizes
+    in the order of their first vertex).
 
     Vertices in no cell get -1; a point set is one component.
 
@@ -165,9 +166,10 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     scale : {"auto", "linear", "log"}
         Colour scale. ``"auto"``: logarithmic for sequential values (not ``kind="distance"``)
         that are all positive and span more than two decades (``max / min > 100``; an HKS,
-        a heat kernel at a short time), linear otherwise; the colour bar then says "log scale" and the iso-values are
-        geometric. Colour-bar ticks are round values, printed with as many digits as they
-        need to differ.
+        a heat kernel at a short time), linear otherwise; the title then says "log colour
+        scale" and the iso-values are geometric. ``"log"`` greys the values <= 0.
+        Colour-bar ticks are round values, printed with as many digits as they need to
+        differ.
     shared_scale : bool
         With several shapes, use one colour scale and one set of iso-values for all.
     sources : int, sequence of int, or a list of them (one per shape), optional
@@ -176,7 +178,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         vertices in no cell, and non-finite values: an infinite distance, a NaN) are drawn
         in a neutral grey and kept out of the colour range; the title says so. On a shape
         with several components the picture frames the source's component and the title
-        names it ("component 3 of 44 (source's)", numbered by size); when the other
+        names it ("component 3 of 44 (source's)", numbered by size, 1 the largest); when the other
         components hide the source from every direction they are drawn see-through.
     critical : dict or object, optional
         Critical points ``{"minimum": idx, "maximum": idx, "saddle": idx}`` (or an object
@@ -443,7 +445,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                 target is not None and target.ndim == 1 and not view_sees(surface, target, plotter.camera.position):
             # the other components hide the source from every side tried: see through them
             view = place_camera(plotter, surface, camera_j, target, focus=focus, occluder=main)
-            grey_actor.prop.opacity = 0.3
+            grey_actor.prop.opacity = 0.12
             notes[0] = notes[0].replace("others grey", "others see-through")
         if notes:
             caption = "\n".join(([caption] if caption else []) + notes)
