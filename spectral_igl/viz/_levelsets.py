@@ -459,8 +459,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
             view.update(zip(("ticks", "tick_labels"), apply_ticks(bar, lo, hi, log)))
         views.append(view)
         if zoom is None:  # fill the panel, leaving room for title and bar
-            fit_view(plotter, view.pop("points", P), height=0.74 if caption else 0.82,
-                     width=0.92, lift=0.035 if (caption and show_bar) else 0.0)
+            lines = len(caption.splitlines()) if caption else 0  # room for every line of the title
+            fit_view(plotter, view.pop("points", P), height=0.82 - 0.05 * min(lines, 4) - (0.03 if lines else 0),
+                     width=0.92, lift=(0.035 if (caption and show_bar) else 0.0) - 0.025 * max(min(lines, 4) - 1, 0))
         else:
             view.pop("points", None)
             z = zoom if zoom is not None else 1.0
