@@ -66,7 +66,8 @@ def main(argv=None):
                  title=None),
         C.render(out / f"fig04_anisotropic_heat_{name}.png", [(W, G), (W, G)], [kw0, kw1],
                  kind="sequential", sources=[j], labels=["isotropic", f"anisotropic, alpha={alpha:g}"],
-                 shared_scale=False, window_size=(900, 450), camera_position=cam_w, zoom=1.0),
+                 shared_scale=False, window_size=(900, 450),  # a given mesh: the automatic view
+                 camera_position=None if args.mesh else cam_w, zoom=None if args.mesh else 1.0),
     ]
     result["images"] = images
     return C.summary("fig04", result)

@@ -17,13 +17,15 @@ def main(argv=None):
     import spectral_igl as sig
     from data_generators import box_tets
 
+    V = T = None
     if args.mesh:
         from spectral_igl.io import read_mesh
 
         V, T = read_mesh(args.mesh)
-        if T.shape[1] != 4:
-            raise SystemExit(f"{args.mesh}: this example needs a tetrahedral .mesh file")
-    else:
+        if T.shape[1] != 4:  # a surface: the other figures use it, this one the generated box
+            print(f"fig08: {args.mesh} is not a tetrahedral mesh; drawing the generated box")
+            V = T = None
+    if V is None:
         V, T = box_tets((10, 8, 6) if args.quick else (24, 18, 12))
     lap = sig.laplacian(V, T)
     i = int(np.argmin(np.linalg.norm(V - (V.min(0) + 0.3 * (V.max(0) - V.min(0))), axis=1)))

@@ -74,9 +74,23 @@ def test_levelset_values_uniform_inside_range():
     assert levelset_values(1.0, 1.0, 5).size == 0
 
 
+def _lightness(rgb):
+    """CIE L* of sRGB colours (n, 3) in [0, 1]."""
+    c = np.asarray(rgb, dtype=float)
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    y = lin @ np.array([0.2126, 0.7152, 0.0722])
+    return np.where(y > (6 / 29) ** 3, 116 * np.cbrt(y) - 16, y * (29 / 3) ** 3)
+
+
 def test_colour_conventions():
     dist = colormap("distance")
-    assert np.allclose(dist(0.0)[:3], (0, 0, 1)) and np.allclose(dist(1.0)[:3], (1, 0, 0))
+    # perceptually uniform: the lightness climbs steadily from a dark minimum to a light
+    # maximum (a rainbow's lightness goes up and down: blue and red both dark)
+    L = _lightness(dist(np.linspace(0, 1, 65))[:, :3])
+    steps = np.diff(L)
+    assert steps.min() > 0 and L[-1] - L[0] > 60
+    assert steps.max() < 2.0 * steps.mean()
+    assert np.allclose(dist(0.0)[:3], (0.267, 0.005, 0.329), atol=0.01)  # viridis
     cyc = colormap("cyclic")
     # red -> yellow -> green -> cyan -> blue -> magenta -> red at sixths of the range
     expected = [(1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 1, 1), (0, 0, 1), (1, 0, 1), (1, 0, 0)]
@@ -86,16 +100,21 @@ def test_colour_conventions():
         colormap("no-such-map")
 
 
-def test_distance_picture_blue_at_source_red_far(tmp_path, sphere):
+def test_distance_picture_dark_at_source(tmp_path, sphere):
     V, F = sphere
     d = np.arccos(np.clip(V @ V[0], -1, 1))
     path = tmp_path / "d.png"
     p = plot_levelsets((V, F), d, sources=[0], filename=path, window_size=(300, 300))
     img = assert_not_blank(path)
     assert img.shape[:2] == (300, 300)
-    # camera faces the source: plenty of (shaded) blue near the centre of the picture
-    centre = img[110:190, 110:190]
-    assert colour_fraction(centre, (0, 0, 200), tol=90) > 0.05
+    # camera faces the source: the centre of the picture (around the source) is darker than
+    # the rest of the surface (viridis: dark at the minimum)
+    L = _lightness(img[..., :3] / 255.0)
+    surface = (img.min(axis=2) < 200) & (L > 12)  # not the white background, not the lines
+    surface[250:] = False  # nor the colour bar
+    centre = np.zeros_like(surface)
+    centre[110:190, 110:190] = True
+    assert L[centre & surface].mean() < L[~centre & surface].mean() - 5
     # iso-lines: black pixels on the surface
     assert colour_fraction(img, (0, 0, 0), tol=40) > 0.002
     assert p._closed if hasattr(p, "_closed") else True
@@ -242,9 +261,9 @@ def test_viewer_filter_method_quantity(viewer):
     truth = np.sqrt(np.maximum(((X - X[5]) ** 2) @ phi2, 0))
     assert np.allclose(viewer.last.values, truth, atol=1e-6 * truth.max())
     assert viewer.last.values[5] == pytest.approx(0.0, abs=1e-6 * truth.max())
-    # distances use the blue-to-red map
+    # distances use the sequential map (viridis)
     lut = viewer.surface_actor.mapper.lookup_table
-    assert np.allclose(np.asarray(lut.GetTableValue(0))[:3], (0, 0, 1), atol=0.02)
+    assert np.allclose(np.asarray(lut.GetTableValue(0))[:3], colormap("distance")(0.0)[:3], atol=0.02)
     count = viewer.evaluations
     viewer.set_method("dense")
     assert viewer.method == "dense" and viewer.evaluations == count + 1

@@ -15,12 +15,13 @@ from .._validate import as_cells, as_points, describe
 
 INSTALL_HINT = 'pip install "spectral_igl[viz]"'
 
-# Colour maps by meaning. Distances and other non-negative quantities: a sequential map
-# from blue (minimum) to red (maximum), the survey's colours. Signed quantities (eigen-
+# Colour maps by meaning. Distances and other non-negative quantities: viridis, a sequential
+# map whose lightness grows uniformly from the minimum (dark blue) to the maximum (yellow):
+# equal steps of value look like equal steps of colour, and it reads in grey and for
+# colour-blind readers (a rainbow puts false edges at cyan and yellow). Signed quantities (eigen-
 # functions, biharmonic kernels, differences): a diverging map, blue - white - red, centred
 # at 0. The hue circle is kept for periodic data (angles, phases) only: its two ends are the
 # same colour, so on anything else the minimum and the maximum look alike.
-DISTANCE_COLORS = ["#0000ff", "#00ffff", "#00ff00", "#ffff00", "#ff0000"]
 DIVERGING_COLORS = ["#2040b0", "#5b8fd6", "#c4d8ef", "#f7f7f7", "#f4c6a8", "#d6604d", "#a01020"]
 CYCLIC_COLORS = ["#ff0000", "#ffff00", "#00ff00", "#00ffff", "#0000ff", "#ff00ff", "#ff0000"]
 #: colour of the parts a source does not reach (other components): outside every scale
@@ -103,8 +104,8 @@ def pyplot():
 def colormap(name):
     """A matplotlib colormap by meaning or by name.
 
-    ``"distance"`` / ``"sequential"``: blue (minimum) to red (maximum), for non-negative
-    quantities; ``"diverging"``: blue - white - red, for signed quantities (drawn with a
+    ``"distance"`` / ``"sequential"``: viridis, perceptually uniform, dark blue (minimum)
+    to yellow (maximum), for non-negative quantities; ``"diverging"``: blue - white - red, for signed quantities (drawn with a
     range centred at 0); ``"cyclic"``: the hue circle, for periodic data only; any other
     string is a matplotlib colormap name; a ``Colormap`` is returned as is.
     """
@@ -115,14 +116,14 @@ def colormap(name):
         return name
     if not isinstance(name, str):
         raise TypeError(f"colormap must be a name or a matplotlib Colormap, got {type(name).__name__}")
+    import matplotlib
+
     if name in ("distance", "sequential"):
-        return LinearSegmentedColormap.from_list("spectral_igl_distance", DISTANCE_COLORS, N=256)
+        return matplotlib.colormaps["viridis"]
     if name == "diverging":
         return LinearSegmentedColormap.from_list("spectral_igl_diverging", DIVERGING_COLORS, N=256)
     if name == "cyclic":
         return LinearSegmentedColormap.from_list("spectral_igl_cyclic", CYCLIC_COLORS, N=256)
-    import matplotlib
-
     try:
         return matplotlib.colormaps[name]
     except KeyError as err:

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["VIEWS", "parse_view", "auto_view", "up_direction", "visible_fraction", "place_camera"]
+__all__ = ["VIEWS", "parse_view", "auto_view", "up_direction", "principal_axes", "frame_directions",
+           "visible_fraction", "view_sees", "place_camera"]
 
 #: named views: the direction from the centre of the shape towards the camera
 VIEWS = {
@@ -73,18 +74,82 @@ def _unit(x):
     return x / n if n > 0 else x
 
 
-def up_direction(points, direction):
-    """An up vector from the shape itself, orthogonal to the view ``direction``.
+def principal_axes(points, faces=None):
+    """Centre and principal axes of a shape, weighted by area when there are triangles.
 
-    The principal axes of ``points`` are the candidates. Those at least ~37 degrees from the
-    view are upright enough once projected; among them the one closest to the file's own
-    ``y`` (then ``z``) axis wins, which keeps an upright scan upright, then the one most
-    orthogonal to the view. Without such an axis, the most orthogonal one. Its sign points along the coordinate axis it is closest to.
+    A scan samples its surface unevenly; weighting each triangle's centroid by its area
+    (plus the spread inside the triangle) makes the axes those of the surface, not of the
+    sampling. Without triangles the points weigh the same.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    faces : (m, 3) int, optional
+
+    Returns
+    -------
+    centre : (3,) float
+    axes : (3, 3) float
+        Unit rows, largest spread first.
+    spread : (3,) float
+        Standard deviations along the axes.
+
+    Examples
+    --------
+    >>> P = np.array([[0, 0, 0], [4, 4, 0], [2, 2, 1], [2, 2, -1], [1, 1, 0], [3, 3, 0]], float)
+    >>> c, axes, s = principal_axes(P)
+    >>> np.round(np.abs(axes[0]), 3)
+    array([0.707, 0.707, 0.   ])
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    if faces is not None and len(faces):
+        F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        A, B, C = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
+        w = 0.5 * np.linalg.norm(np.cross(B - A, C - A), axis=1)
+        if w.sum() > 0:
+            cen = (A + B + C) / 3.0
+            centre = (w[:, None] * cen).sum(0) / w.sum()
+            # second moment of each triangle about the centre: exact for a uniform density
+            M = sum(np.einsum("k,ki,kj->ij", w, X - centre, X - centre) for X in (A, B, C)) / 12.0
+            M += np.einsum("k,ki,kj->ij", w, cen - centre, cen - centre) * 0.75
+            M /= w.sum()
+            return _axes_of(centre, M)
+    if len(P) == 0:
+        return np.zeros(3), np.eye(3), np.zeros(3)
+    centre = P.mean(0)
+    return _axes_of(centre, (P - centre).T @ (P - centre) / len(P))
+
+
+def _axes_of(centre, M):
+    vals, vecs = np.linalg.eigh(M)
+    order = np.argsort(vals)[::-1]
+    return centre, vecs.T[order], np.sqrt(np.maximum(vals[order], 0.0))
+
+
+def _sign_up(a):
+    """``a`` or ``-a``: the one along the file's ``y`` (then ``z``, then ``x``) where that is clear."""
+    for k in (1, 2, 0):
+        if abs(a[k]) > 0.2:
+            return a if a[k] > 0 else -a
+    return a
+
+
+def up_direction(points, direction, faces=None):
+    """An up vector from the shape's principal axes, orthogonal to the view ``direction``.
+
+    The candidates are the principal axes of the shape (area-weighted with ``faces``,
+    :func:`principal_axes`), never the file's axes: a scan tilted in its file is drawn
+    along its own axes. An axis within 30 degrees of the file's ``y`` (then ``z``) axis is
+    kept as up (an upright file stays upright; a scan tilted by 45 degrees has none); otherwise the axis of largest spread wins.
+    Axes closer than ~37 degrees to the view do not count (they shrink once projected);
+    without any other, the one most orthogonal to the view is used. The sign follows the
+    file's ``y`` (then ``z``, ``x``) axis where the axis has a clear component along it.
 
     Parameters
     ----------
     points : (n, 3) float
     direction : (3,) float
+    faces : (m, 3) int, optional
 
     Returns
     -------
@@ -92,22 +157,36 @@ def up_direction(points, direction):
     """
     P = np.asarray(points, dtype=float)
     d = _unit(direction)
-    if len(P) >= 3:
-        C = np.cov((P - P.mean(0)).T)
-        _, axes = np.linalg.eigh(C)
-        axes = axes.T[::-1]  # largest variance first
+    axes = principal_axes(P, faces)[1] if len(P) >= 3 else np.eye(3)
+    upright = [a for a in axes if abs(a @ d) < 0.8]
+    if upright:
+        a = _vertical(upright)
     else:
-        axes = np.eye(3)
-    # any axis at least ~37 degrees away from the view is upright enough once projected;
-    # among those, the file's own vertical (y, then z) decides, then orthogonality
-    score = [(0.6 * abs(a[1]) + 0.4 * abs(a[2]) + 0.3 * (1.0 - abs(a @ d)))
-             if abs(a @ d) < 0.8 else -1.0 + (1.0 - abs(a @ d)) for a in axes]
-    a = axes[int(np.argmax(score))]
-    a = a * (1.0 if a[int(np.argmax(np.abs(a)))] >= 0 else -1.0)
+        a = axes[int(np.argmin(np.abs(axes @ d)))]
+    a = _sign_up(a)
     up = a - (a @ d) * d
     if np.linalg.norm(up) < 1e-6:  # view along the axis: any orthogonal vector
         up = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
     return _unit(up)
+
+
+def _vertical(axes):
+    """The principal axis drawn upright: one within 30 degrees of the file's ``y`` (then
+    ``z``) axis if there is one, else the first (the largest spread)."""
+    for k in (1, 2):  # an axis along the file's vertical keeps an upright file upright
+        along = [b for b in axes if abs(b[k]) > np.cos(np.radians(30.0))]
+        if along:
+            return along[0]
+    return axes[0]
+
+
+def frame_directions(axes):
+    """The six principal directions and the eight diagonals of the frame ``axes`` (rows)."""
+    axes = np.asarray(axes, dtype=float)
+    out = [s * a for a in axes for s in (1.0, -1.0)]
+    out += [_unit(sx * axes[0] + sy * axes[1] + sz * axes[2]) for sx in (1, -1) for sy in (1, -1)
+            for sz in (1, -1)]
+    return out
 
 
 class _Occluder:
@@ -148,6 +227,32 @@ def visible_fraction(occluder, targets, focal, radius, direction, eps):
         start = q + eps * to_eye / dist  # leave the surface the point lies on
         seen += not occluder.blocked(start, eye)
     return seen / max(len(np.atleast_2d(targets)), 1)
+
+
+def view_sees(surface, point, eye) -> bool:
+    """Whether the segment from ``point`` (on ``surface``) to the camera at ``eye`` is clear.
+
+    Parameters
+    ----------
+    surface : pyvista.PolyData
+    point, eye : (3,) float
+
+    Returns
+    -------
+    bool
+    """
+    if not _has_faces(surface):
+        return True
+    if not surface.is_all_triangles:
+        surface = surface.triangulate()
+    P = np.asarray(surface.points, dtype=float)
+    diag = float(np.linalg.norm(P.max(0) - P.min(0))) or 1.0
+    q, eye = np.asarray(point, dtype=float).reshape(3), np.asarray(eye, dtype=float).reshape(3)
+    to_eye = eye - q
+    dist = float(np.linalg.norm(to_eye))
+    if dist <= 1e-3 * diag:
+        return True
+    return not _Occluder(surface).blocked(q + 1e-3 * diag * to_eye / dist, eye)
 
 
 def _surface_arrays(surface):
@@ -192,13 +297,16 @@ def _rotations(n, angles):
     return out
 
 
-def auto_view(surface, target, *, neighbours=None):
+def auto_view(surface, target, *, neighbours=None, focal=None):
     """A view direction from outside the shape that sees the point ``target``.
 
     Candidates, in order of preference: the outward normal at the target averaged over a
     neighbourhood (5% of the diagonal), its blend with the direction from the centre, the
-    direction from the centre, the normal tilted by 25 and 50 degrees, the six axis
-    directions and the eight diagonals. Each candidate is scored by the fraction of the
+    direction from the centre, the normal tilted by 25 and 50 degrees, for a point seen
+    from less than about half of the directions (inside a concave region) the middle of
+    the cone of directions it is seen from, the six principal
+    directions of the shape and the eight diagonals of its principal frame
+    (:func:`principal_axes`). Each candidate is scored by the fraction of the
     target's neighbourhood that a ray test shows unobstructed from the camera that
     ``reset_camera`` would place along it (the target itself weighing half); the first
     candidate with the best score wins.
@@ -213,6 +321,9 @@ def auto_view(surface, target, *, neighbours=None):
     neighbours : (k, 3) float, optional
         Points around the target that should be visible too; default the surface vertices
         within 3% of the diagonal (at most 12 of them).
+    focal : (3,) float, optional
+        The point the camera looks at (default the centre of the bounding box); the camera
+        stays as far from it as from the centre, outside the whole shape.
 
     Returns
     -------
@@ -230,9 +341,10 @@ def auto_view(surface, target, *, neighbours=None):
         return _auto_view_many(surface, P, F, target)
     target = target.reshape(3)
     lo, hi = P.min(0), P.max(0)
-    focal = (lo + hi) / 2.0
+    centre = (lo + hi) / 2.0
+    focal = centre if focal is None else np.asarray(focal, dtype=float).reshape(3)
     diag = float(np.linalg.norm(hi - lo)) or 1.0
-    radius = diag / 2.0
+    radius = diag / 2.0 + float(np.linalg.norm(focal - centre))
     if len(F) == 0:
         return _unit(target - focal) if np.linalg.norm(target - focal) > 0 else _unit(VIEWS["iso"]), 1.0
     n = _outward_normal(P, F, target, 0.05 * diag)
@@ -249,7 +361,9 @@ def auto_view(surface, target, *, neighbours=None):
             close = close[sign * (vn[close] @ n) > 0][:12]
         neighbours = P[close]
     targets = np.vstack([target[None, :], np.asarray(neighbours, dtype=float).reshape(-1, 3)])
-    out = target - focal
+    out = target - centre
+    occ = _Occluder(surface)
+    eps = 1e-3 * diag
     cands = []
     if np.linalg.norm(n) > 0:
         cands.append(n)
@@ -259,11 +373,10 @@ def auto_view(surface, target, *, neighbours=None):
         cands.append(_unit(out))
     if np.linalg.norm(n) > 0:
         cands += _rotations(n, np.radians([25.0, 50.0]))
-    cands += [_unit(VIEWS[k]) for k in ("+x", "-x", "+y", "-y", "+z", "-z")]
-    cands += [_unit(np.array([sx, sy, sz], dtype=float)) for sx in (1, -1) for sy in (1, -1)
-              for sz in (1, -1)]
-    occ = _Occluder(surface)
-    eps = 1e-3 * diag
+    opening = _opening(occ, target, focal, radius, eps)
+    if opening is not None:  # the middle of the cone the point is seen from (a mouth, a hole)
+        cands.append(opening)
+    cands += frame_directions(principal_axes(P, F)[1])
     best, best_score = cands[0], -1.0
     for d in cands:
         # the target itself counts as much as all its neighbours together
@@ -271,13 +384,38 @@ def auto_view(surface, target, *, neighbours=None):
         s += 0.5 * (visible_fraction(occ, targets[1:], focal, radius, d, eps) if len(targets) > 1
                     else 2.0 * s)
         # the point must also face the camera, not be seen edge-on through the rim
-        if n is not None and np.linalg.norm(n) > 0 and d @ n < 0.05:
+        if np.linalg.norm(n) > 0 and d @ n < 0.05:
             s *= 0.5
         if s > best_score + 1e-9:
             best, best_score = d, s
         if best_score >= 1.0:
             break
     return best, best_score
+
+
+def _fibonacci_directions(k):
+    """``k`` unit vectors spread evenly over the sphere."""
+    i = np.arange(k) + 0.5
+    z = 1.0 - 2.0 * i / k
+    phi = np.pi * (1.0 + 5.0 ** 0.5) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def _opening(occ, target, focal, radius, eps, k=96):
+    """Mean of the directions (of ``k`` spread over the sphere) from which ``target`` is seen.
+
+    Inside a concave region (a mouth, the inner side of a handle) the outward normal often
+    points at a wall; the middle of the cone of clear views looks straight in. ``None``
+    when the target is seen from no direction, or from nearly every one (a convex tip:
+    the normal is better then).
+    """
+    dirs = _fibonacci_directions(k)
+    seen = np.array([visible_fraction(occ, target[None, :], focal, radius, d, eps) > 0 for d in dirs])
+    if not seen.any() or seen.mean() > 0.45:
+        return None
+    m = dirs[seen].sum(axis=0)
+    return _unit(m) if np.linalg.norm(m) > 1e-9 * seen.sum() else None
 
 
 def _auto_view_many(surface, P, F, targets):
@@ -294,9 +432,7 @@ def _auto_view_many(surface, P, F, targets):
     if np.linalg.norm(span) > 0:  # side views of the line between the features
         axis = _unit(targets[-1] - targets[0])
         cands += _rotations(axis, [np.pi / 2.0])
-    cands += [_unit(VIEWS[k]) for k in ("+x", "-x", "+y", "-y", "+z", "-z")]
-    cands += [_unit(np.array([sx, sy, sz], dtype=float)) for sx in (1, -1) for sy in (1, -1)
-              for sz in (1, -1)]
+    cands += frame_directions(principal_axes(P, F)[1])
     occ = _Occluder(surface)
     best, best_score = cands[0], -1.0
     for d in cands:
@@ -310,7 +446,7 @@ def _auto_view_many(surface, P, F, targets):
     return best, float(np.clip(best_score, 0.0, 1.0))
 
 
-def place_camera(plotter, surface, camera="auto", target=None):
+def place_camera(plotter, surface, camera="auto", target=None, focus=None, occluder=None):
     """Point ``plotter``'s camera at ``surface``.
 
     Parameters
@@ -321,13 +457,20 @@ def place_camera(plotter, surface, camera="auto", target=None):
     camera : see :func:`spectral_igl.viz.parse_view`
     target : (3,) float, optional
         The point to face with ``camera="auto"`` (the source or the feature drawn); without
-        it ``"auto"`` is the ``"iso"`` view with the shape's own up direction.
+        it ``"auto"`` looks at the broad side of the shape, along a diagonal of its
+        principal frame (:func:`principal_axes`).
+    focus : (k, 3) float, optional
+        The points to frame (the source's component of a shape with several); default every
+        vertex of a cell of ``surface``. The camera looks at their centre from outside the
+        whole shape.
+    occluder : pyvista.PolyData, optional
+        The triangles that can hide the target (default ``surface``).
 
     Returns
     -------
     dict
         ``direction`` and ``up`` (unit vectors), ``visible`` (fraction of the target's
-        neighbourhood seen; ``None`` when not tested).
+        neighbourhood seen; ``None`` when not tested), ``points`` (those to frame).
     """
     mode, value = parse_view(camera)
     if mode == "pyvista":
@@ -335,27 +478,36 @@ def place_camera(plotter, surface, camera="auto", target=None):
         plotter.reset_camera()
         return {"direction": None, "up": None, "visible": None}
     P = np.asarray(surface.points, dtype=float)
+    F = None
+    used = P
+    if _has_faces(surface):
+        tri = surface if surface.is_all_triangles else surface.triangulate()
+        F = _surface_arrays(tri)[1]
+        used = np.asarray(tri.points)[np.unique(F)]
     lo, hi = P.min(0), P.max(0)
-    focal = (lo + hi) / 2.0
+    centre = (lo + hi) / 2.0
+    if focus is not None:
+        used = np.asarray(focus, dtype=float).reshape(-1, 3)
+    focal = (used.min(0) + used.max(0)) / 2.0 if len(used) else centre
+    radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-12) + float(np.linalg.norm(focal - centre))
     visible = None
     if mode == "direction":
         d = value
     elif target is None:
-        d = _unit(VIEWS["iso"])
-    elif not _has_faces(surface):
+        axes = principal_axes(P, F)[1]
+        front = axes[2] * (1.0 if axes[2][int(np.argmax(np.abs(axes[2])))] >= 0 else -1.0)
+        d = _unit(front + 0.4 * _sign_up(axes[1]) + 0.25 * _sign_up(axes[0]))
+    elif F is None:
         out = np.mean(np.atleast_2d(np.asarray(target, dtype=float)), axis=0) - focal
         d = _unit(out) if np.linalg.norm(out) > 0 else _unit(VIEWS["iso"])
         d = _unit(d + 0.3 * _unit(VIEWS["iso"]))
     else:
-        d, visible = auto_view(surface, target)
-    used = P
-    if _has_faces(surface):
-        tri = surface if surface.is_all_triangles else surface.triangulate()
-        used = np.asarray(tri.points)[np.unique(_surface_arrays(tri)[1])]
-    up = up_direction(used, d)
-    dist = camera_distance(max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-12))
+        d, visible = auto_view(surface if occluder is None else occluder, target,
+                               focal=focal if focus is not None else None)
+    up = up_direction(P if F is not None else used, d, F)  # the whole shape's axes, also for a part
+    dist = camera_distance(radius)
     plotter.camera_position = [tuple(focal + dist * d), tuple(focal), tuple(up)]
-    plotter.reset_camera()
+    plotter.reset_camera_clipping_range()
     return {"direction": d, "up": up, "visible": visible, "points": used}
 
 

@@ -5,25 +5,33 @@ import numpy as np
 
 from ._backend import (CRITICAL_COLORS, KINDS, NEUTRAL_COLOR, color_kind, colormap, headless, pyvista,
                        save_png, to_pyvista)
-from ._camera import fit_view, parse_view, place_camera
+from ._camera import fit_view, parse_view, place_camera, view_sees
+from ._scale import SCALES, apply_ticks, use_log_scale
 
 __all__ = ["plot_levelsets", "levelset_values", "reached_vertices"]
 
 _VOLUME = ("boundary", "clip", "slices", "isosurfaces")
 
 
-def levelset_values(vmin: float, vmax: float, n_levels: int) -> np.ndarray:
+def levelset_values(vmin: float, vmax: float, n_levels: int, log: bool = False) -> np.ndarray:
     """``n_levels`` iso-values uniformly sampled inside ``(vmin, vmax)`` (end points excluded).
+
+    With ``log`` they are uniform in the logarithm (geometric), as on a logarithmic colour
+    scale.
 
     Examples
     --------
     >>> levelset_values(0.0, 1.0, 3)
     array([0.25, 0.5 , 0.75])
+    >>> levelset_values(1e-3, 1e1, 3, log=True)
+    array([0.01, 0.1 , 1.  ])
     """
     if n_levels < 0:
         raise ValueError(f"n_levels must be >= 0, got {n_levels}")
-    if not np.isfinite(vmin) or not np.isfinite(vmax) or vmax <= vmin:
+    if not np.isfinite(vmin) or not np.isfinite(vmax) or vmax <= vmin or (log and vmin <= 0):
         return np.empty(0)
+    if log:
+        return np.logspace(np.log10(vmin), np.log10(vmax), n_levels + 2)[1:-1]
     return np.linspace(vmin, vmax, n_levels + 2)[1:-1]
 
 
@@ -66,15 +74,31 @@ def reached_vertices(mesh, sources=None):
     -------
     (n,) bool
     """
+    label = component_labels(mesh)
+    src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
+    if src.size == 0:
+        return label >= 0
+    return np.isin(label, label[src]) & (label >= 0)
+
+
+def component_labels(mesh):
+    """Connected component of every vertex, numbered by size (0: the largest; equal sizes
+    in the order of their first vertex).
+
+    Vertices in no cell get -1; a point set is one component.
+
+    Parameters
+    ----------
+    mesh : pyvista.DataSet
+
+    Returns
+    -------
+    (n,) int
+    """
     n = mesh.n_points
     cells = _cell_array(mesh)
     if cells is None:
-        return np.ones(n, dtype=bool)
-    used = np.zeros(n, dtype=bool)
-    used[cells.ravel()] = True
-    src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
-    if src.size == 0:
-        return used
+        return np.zeros(n, dtype=np.int64)
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
@@ -83,7 +107,14 @@ def reached_vertices(mesh, sources=None):
     cols = cells[:, 1:].ravel()
     A = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
     _, label = connected_components(A, directed=False)
-    return np.isin(label, label[src])
+    used = np.zeros(n, dtype=bool)
+    used[cells.ravel()] = True
+    sizes = np.bincount(label[used], minlength=label.max() + 1)
+    rank = np.empty_like(sizes)
+    rank[np.argsort(-sizes, kind="stable")] = np.arange(sizes.size)
+    out = rank[label]
+    out[~used] = -1
+    return out
 
 
 def _cell_array(mesh):
@@ -102,7 +133,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                    plotter=None, filename=None, off_screen=None, window_size=None,
                    camera="auto", camera_position=None, zoom=None, source_color="black",
                    scalar_bar=True, line_width=2.0, point_size=None, show_edges=False,
-                   background="white", neutral_color=None):
+                   background="white", neutral_color=None, scale="auto"):
     r"""Draw a scalar function on a shape with iso-lines at uniformly sampled values.
 
     Parameters
@@ -116,8 +147,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         Values at the vertices/points.
     kind : {"auto", "distance", "sequential", "diverging", "cyclic"} or a colormap name
         What the values mean, which fixes the colour map and the range. ``"distance"``
-        and ``"sequential"`` (non-negative quantities): blue at the minimum to red at the
-        maximum. ``"diverging"`` (signed quantities): blue - white - red with the range
+        and ``"sequential"`` (non-negative quantities): viridis, perceptually uniform, dark
+        at the minimum and yellow at the maximum. ``"diverging"`` (signed quantities):
+        blue - white - red with the range
         centred at 0, :math:`[-\max|f|, \max|f|]`. ``"cyclic"``: the hue circle, whose
         ends are the same colour -- for periodic data only. ``"auto"`` (default): diverging
         when ``f`` takes both signs, else sequential. A matplotlib name is drawn over the
@@ -131,13 +163,23 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     clim : (2,) float, optional
         Colour range; default from ``kind`` and the values of ``f`` on the reached parts
         (of all ``f`` when ``shared_scale``).
+    scale : {"auto", "linear", "log"}
+        Colour scale. ``"auto"``: logarithmic for sequential values (not ``kind="distance"``)
+        that are all positive and span more than two decades (``max / min > 100``; an HKS,
+        a heat kernel at a short time), linear otherwise; the title then says "log colour
+        scale" and the iso-values are geometric. ``"log"`` greys the values <= 0.
+        Colour-bar ticks are round values, printed with as many digits as they need to
+        differ.
     shared_scale : bool
         With several shapes, use one colour scale and one set of iso-values for all.
     sources : int, sequence of int, or a list of them (one per shape), optional
         Source vertices, marked by dots (with several shapes: the same indices in every
         panel, or one entry per panel, ``None`` for none). Connected components containing no source (and
-        vertices in no cell, and non-finite values) are drawn in a neutral grey and kept
-        out of the colour range.
+        vertices in no cell, and non-finite values: an infinite distance, a NaN) are drawn
+        in a neutral grey and kept out of the colour range; the title says so. On a shape
+        with several components the picture frames the source's component and the title
+        names it ("component 3 of 44 (source's)", numbered by size, 1 the largest); when the other
+        components hide the source from every direction they are drawn see-through.
     critical : dict or object, optional
         Critical points ``{"minimum": idx, "maximum": idx, "saddle": idx}`` (or an object
         with attributes ``minima``, ``maxima``, ``saddles``), marked blue, red and green.
@@ -162,9 +204,12 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         Pixels; default 600 x 600 per panel.
     camera : str, (3,) float or pyvista camera position
         ``"auto"`` (default): face the first source -- or, without sources, the minimum of
-        ``f`` (both its minimum and maximum when ``f`` is signed) -- from outside the shape, along the outward normal there when a ray test
-        shows it unobstructed (else the best of a few other directions), with the up
-        direction from the principal axes of the shape (:func:`spectral_igl.viz.auto_view`).
+        ``f`` (both its minimum and maximum when ``f`` is signed; a ``kind="sequential"``
+        descriptor has no point to face and is seen from the broad side of the shape) --
+        from outside the shape, along the outward normal there when a ray test
+        shows it unobstructed (else the best of a few other directions, among them the
+        principal directions of the shape), with the up direction from the area-weighted
+        principal axes of the shape, not the file's axes (:func:`spectral_igl.viz.auto_view`).
         A tetrahedral mesh drawn inside (``volume`` other than ``"boundary"``) is seen from
         ``"iso"``, facing the cut (which passes through the first source, as do the slices).
         Or a named view ``"iso"``, ``"+x"``, ``"-z"``, ...; a direction ``(dx, dy, dz)``
@@ -186,7 +231,9 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         The plotter (closed when ``filename`` was given; its last image is in
         ``plotter.last_image``). ``plotter.spectral_igl_views`` lists, per panel, the
         camera ``direction``, ``up`` and the ``visible`` fraction of the target's
-        neighbourhood, the colour ``kind`` and ``clim`` used.
+        neighbourhood, the colour ``kind``, ``clim``, ``log`` (logarithmic scale),
+        ``ticks`` and ``tick_labels`` of the colour bar, and ``notes`` (what the title adds:
+        the source's component, the grey parts).
 
     Examples
     --------
@@ -206,6 +253,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         raise TypeError(f"kind must be a string, got {type(kind).__name__}")
     if volume not in _VOLUME:
         raise ValueError(f"volume must be one of {_VOLUME}, got {volume!r}")
+    if scale not in SCALES:
+        raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
     levels = list(n_levels) if isinstance(n_levels, (list, tuple)) else [n_levels] * len(shapes)
     if len(levels) != len(shapes):
         raise ValueError(f"got {len(levels)} n_levels for {len(shapes)} shape(s)")
@@ -220,7 +269,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
     neutral = neutral_color or NEUTRAL_COLOR
 
     per_sources = _sources_per_panel(sources, len(shapes))
-    meshes, values, reached = [], [], []
+    meshes, values, reached, labels_c = [], [], [], []
     for s, fi, sources in zip(shapes, fs, per_sources):
         mesh, mkind = to_pyvista(s)
         fi = np.asarray(fi)
@@ -234,7 +283,10 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
             raise ValueError(f"source index out of range [0, {mesh.n_points})")
         meshes.append((mesh, mkind))
         values.append(fi)
-        reached.append(reached_vertices(mesh, src) & np.isfinite(fi))
+        comp = component_labels(mesh)
+        labels_c.append(comp)
+        reach = (comp >= 0) & (np.isin(comp, comp[src]) if src.size else True)
+        reached.append(reach & np.isfinite(fi))
 
     # what the values mean: one reading for all panels of a shared scale
     known = kind in KINDS
@@ -248,6 +300,20 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         per_panel = [meaning] * len(values)
     cmaps = [colormap(cmap if cmap is not None else (kind if not known else
                       ("distance" if m == "sequential" else m))) for m in per_panel]
+    # logarithmic colours for positive values spanning decades (one decision per scale); a
+    # distance is read on a linear scale
+    if kind == "distance":
+        per_meaning, meaning_all = ["distance"] * len(values), "distance"
+    else:
+        per_meaning, meaning_all = per_panel, meaning
+    if shared_scale or clim is not None:
+        logs = [use_log_scale(np.concatenate([fi[r] for fi, r in zip(values, reached)]), scale,
+                              meaning_all)] * len(values)
+    else:
+        logs = [use_log_scale(fi[r], scale, m) for fi, r, m in zip(values, reached, per_meaning)]
+    for j, log in enumerate(logs):  # a log scale has no place for values <= 0: grey them
+        if log:
+            reached[j] = reached[j] & (values[j] > 0)
 
     def _range(mesh, mkind, fi, ok, src):
         if mkind == "tet" and (src is None or np.size(src) == 0):  # range on the boundary, as in the survey's Fig. 8
@@ -287,7 +353,10 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         lo, hi = rng
         if hi <= lo:
             hi = lo + 1.0
-        iso = levelset_values(lo, hi, levels[j])
+        log = logs[j]
+        if log and lo <= 0:
+            raise ValueError(f"a logarithmic colour scale needs a positive range, got clim ({lo:g}, {hi:g})")
+        iso = levelset_values(lo, hi, levels[j], log=log)
         mesh = mesh.copy()
         mesh.point_data["f"] = np.where(ok, fi, np.nan)
         # pyvista links mappers whose scalar bars share a title: one title per colour scale
@@ -296,15 +365,17 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                   width=0.6, position_x=0.2, position_y=0.03, label_font_size=12)
         show_bar = bool(scalar_bar and (j == ncol - 1 or not (shared_scale or clim is not None)))
         common = dict(scalars="f", cmap=cmaps[j], clim=(lo, hi), show_scalar_bar=show_bar,
-                      scalar_bar_args=sb, nan_color=neutral, ambient=0.25, diffuse=0.8)
+                      scalar_bar_args=sb, nan_color=neutral, ambient=0.25, diffuse=0.8, log_scale=log)
         main, rest = split_reached(pv, mesh, mkind, ok)
+        grey_actor = None
         if rest is not None:  # the parts out of reach: grey, no scale, no lines
             if mkind == "points":
                 plotter.add_mesh(rest, color=neutral, render_points_as_spheres=True,
                                  point_size=point_size or 4.0, show_scalar_bar=False)
             else:
                 grey = outer_surface(rest) if mkind == "tet" else rest
-                plotter.add_mesh(grey, color=neutral, smooth_shading=True, show_scalar_bar=False)
+                grey_actor = plotter.add_mesh(grey, color=neutral, smooth_shading=True,
+                                              show_scalar_bar=False)
         if mkind == "triangle":
             plotter.add_mesh(main, smooth_shading=True, show_edges=show_edges, **common)
             _add_isolines(plotter, main, iso, line_width)
@@ -326,10 +397,12 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         caption = labels[j] if labels is not None else (title if j == 0 else None)
         if labels is not None and title and j == 0:
             caption = f"{title}\n{caption}"
-        if caption:
-            panel = plotter.window_size[0] / ncol
-            plotter.add_text(caption, position="upper_edge", color="black",
-                             font_size=_font_size(caption, panel))
+        comp = labels_c[j]
+        notes = _grey_notes(comp, src, fi, ok, log)
+        if log:
+            notes.append("log colour scale")
+        n_comp = int(comp.max()) + 1 if comp.size else 0
+        part = np.isin(comp, comp[src]) & (comp >= 0) if src.size else None
         # where to look from
         mode, _ = parse_view(camera)
         drawn = outer_surface(mesh) if mkind == "tet" else mesh
@@ -341,6 +414,8 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
                 camera_j = camera
                 if src.size:
                     target = P[src[0]]
+                elif kind not in ("auto", "distance", "diverging") and per_panel[j] == "sequential":
+                    target = None  # a descriptor: no point to face, the broad side of the shape
                 elif ok.any() and per_panel[j] == "diverging" and mkind != "tet":
                     cand = np.flatnonzero(ok)  # a signed function: both ends of the scale
                     target = P[[cand[np.argmin(fi[cand])], cand[np.argmax(fi[cand])]]]
@@ -361,12 +436,32 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
             _same_points(meshes[0][0], mesh)
         if same:  # the same shape in every panel: one view, so that panels compare at a glance
             camera_j = views[0]["direction"]
-        view = place_camera(plotter, drawn if mkind != "points" else mesh, camera_j, target)
-        view.update(kind=per_panel[j], clim=(lo, hi))
+        focus = None
+        if part is not None and n_comp > 1 and mkind != "points" and mode == "auto" and not same:
+            focus = P[part]  # frame the source's component
+        surface = drawn if mkind != "points" else mesh
+        view = place_camera(plotter, surface, camera_j, target, focus=focus)
+        if focus is not None and mkind == "triangle" and grey_actor is not None and \
+                target is not None and target.ndim == 1 and not view_sees(surface, target, plotter.camera.position):
+            # the other components hide the source from every side tried: see through them
+            view = place_camera(plotter, surface, camera_j, target, focus=focus, occluder=main)
+            grey_actor.prop.opacity = 0.12
+            notes[0] = notes[0].replace("others grey", "others see-through")
+        if notes:
+            caption = "\n".join(([caption] if caption else []) + notes)
+        if caption:
+            panel = plotter.window_size[0] / ncol
+            plotter.add_text(caption, position="upper_edge", color="black",
+                             font_size=_font_size(caption, panel))
+        view.update(kind=per_panel[j], clim=(lo, hi), log=log, notes=notes)
+        if show_bar:
+            bar = plotter.scalar_bars[bar_title] if bar_title in plotter.scalar_bars else None
+            view.update(zip(("ticks", "tick_labels"), apply_ticks(bar, lo, hi, log)))
         views.append(view)
         if zoom is None:  # fill the panel, leaving room for title and bar
-            fit_view(plotter, view.pop("points", P), height=0.74 if caption else 0.82,
-                     width=0.92, lift=0.035 if (caption and show_bar) else 0.0)
+            lines = len(caption.splitlines()) if caption else 0  # room for every line of the title
+            fit_view(plotter, view.pop("points", P), height=0.82 - 0.05 * min(lines, 4) - (0.03 if lines else 0),
+                     width=0.92, lift=(0.035 if (caption and show_bar) else 0.0) - 0.025 * max(min(lines, 4) - 1, 0))
         else:
             view.pop("points", None)
             z = zoom if zoom is not None else 1.0
@@ -381,6 +476,29 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
         plotter.close()
         save_png(image, filename)
     return plotter
+
+
+def _grey_notes(comp, src, f, ok, log):
+    """What the grey parts of a panel are, for its title: the source's component, the
+    vertices without a value on the scale (infinite, NaN, or <= 0 on a log scale)."""
+    notes = []
+    n_comp = int(comp.max()) + 1 if comp.size else 0
+    mine = comp >= 0
+    if src.size and n_comp > 1:
+        ids = sorted({int(c) + 1 for c in comp[src] if c >= 0})
+        which = "component" if len(ids) == 1 else "components"
+        whose = "source's" if len(src) == 1 else "sources'"
+        mine = np.isin(comp, comp[src]) & (comp >= 0)
+        others = (comp >= 0) & ~mine
+        inf = " (infinite)" if others.any() and not np.isfinite(f[others]).any() else ""
+        notes.append(f"{which} {', '.join(map(str, ids))} of {n_comp} ({whose}); others grey{inf}")
+    bad = mine & ~ok
+    if bad.any():
+        kinds = [name for name, m in (("infinite", np.isinf(f[bad])), ("NaN", np.isnan(f[bad])),
+                                       ("<= 0 on the log scale", np.isfinite(f[bad]) & (f[bad] <= 0)))
+                 if np.any(m)]
+        notes.append(f"grey: {int(bad.sum())} vertices {' or '.join(kinds)}")
+    return notes
 
 
 def _same_points(a, b):
@@ -408,7 +526,7 @@ def _set_attribute(pv, obj, name, value):
 def _font_size(caption, panel):
     """A font size (points) at which the longest line of ``caption`` fits in ``panel`` pixels."""
     longest = max((len(line) for line in str(caption).splitlines()), default=1)
-    fit = 0.92 * panel / (0.62 * max(longest, 1))  # average glyph width ~0.62 em
+    fit = 0.92 * panel / (1.25 * max(longest, 1))  # VTK's glyphs: ~1.2 pixels wide per point
     return int(np.clip(min(panel / 50, fit), 6, 11))
 
 

@@ -10,6 +10,7 @@ from ..laplacian import Laplacian, laplacian
 from ..quantity import FILTERED, QUANTITIES, color_meaning, evaluate, uses_time
 from ._backend import NEUTRAL_COLOR, color_kind, colormap, display_available, pyvista, save_png, to_pyvista
 from ._levelsets import add_source_marker, levelset_values, lines_over_surfaces, outer_surface, reached_vertices
+from ._scale import apply_ticks, use_log_scale
 
 __all__ = ["Viewer"]
 
@@ -257,8 +258,10 @@ class Viewer:
         """Recompute the scalar for the current settings and refresh actors and text.
 
         Parts of the shape the source does not reach (other connected components) are drawn
-        in a neutral grey and kept out of the colour scale; sequential colours for distances
-        and non-negative kernels, diverging colours centred at 0 for signed kernels.
+        in a neutral grey and kept out of the colour scale; sequential colours (viridis) for
+        distances and non-negative kernels, on a logarithmic scale when the values are
+        positive and span more than two decades (:func:`spectral_igl.viz.plot_levelsets`),
+        diverging colours centred at 0 for signed kernels.
         """
         ev = evaluate(self.lap, self.quantity, self.source, self.filter, self.t,
                       method=self.method, tol=self.tol, diagonal=self.diagonal)
@@ -270,6 +273,7 @@ class Viewer:
         self.mesh.point_data["f"] = f
         fin = f[ok]
         self.color_kind = color_kind(fin, color_meaning(self.quantity, self.filter))
+        self.log = use_log_scale(fin, "auto", self.color_kind)  # a kernel spanning decades
         lo, hi = (float(fin.min()), float(fin.max())) if fin.size else (0.0, 1.0)
         if self.color_kind == "diverging":
             lo, hi = -max(abs(lo), abs(hi)), max(abs(lo), abs(hi))
@@ -280,8 +284,11 @@ class Viewer:
         mapper.lookup_table.cmap = colormap(self.cmap or ("distance" if self.color_kind == "sequential"
                                                           else self.color_kind))
         mapper.lookup_table.nan_color = NEUTRAL_COLOR
+        mapper.lookup_table.log_scale = self.log
         mapper.scalar_range = self.clim
-        self.isovalues = levelset_values(lo, hi, self.n_levels)
+        bar = self.plotter.scalar_bars[" "] if " " in self.plotter.scalar_bars else None
+        self.ticks = apply_ticks(bar, lo, hi, self.log)[1]
+        self.isovalues = levelset_values(lo, hi, self.n_levels, log=self.log)
         self.plotter.remove_actor("isolines")
         lines = None
         if self.isovalues.size:
@@ -313,7 +320,8 @@ class Viewer:
         if self.quantity in FILTERED:
             keys += "\nf: filter   m: method"
         method = f"method: {self.method}   " if self.quantity in FILTERED else ""
-        return (f"{ev.label} from vertex {self.source}\n{method}"
+        scale = "   log colour scale" if getattr(self, "log", False) else ""
+        return (f"{ev.label} from vertex {self.source}{scale}\n{method}"
                 f"error bound: {bound}   time: {1e3 * ev.seconds:.1f} ms\n{keys}")
 
     def _sync_slider(self):
