@@ -384,6 +384,18 @@ def _laplacian(V, C, args):
         raise CLIError(f"cannot build the Laplacian: {err}", EXIT_INPUT) from err
 
 
+def _range_text(values):
+    """``"min a, max b"`` over the finite values, and how many are not (unreachable components)."""
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v)
+    if not ok.any():
+        return "no finite value"
+    text = f"min {v[ok].min():.6g}, max {v[ok].max():.6g}"
+    if not ok.all():
+        text += f" ({int((~ok).sum())} vertices infinite: no path from the source's component)"
+    return text
+
+
 def _column_names(values, names=None):
     """Names of the columns of ``values`` (CSV header, fields of a mesh file)."""
     k = 1 if values.ndim == 1 else values.shape[1]
@@ -470,7 +482,7 @@ def _job_kernel_distance(args):
     prog.update()
     prog.close()
     _say(args, f"{ev.label} from vertex {args.source} on {name} ({lap.n} vertices): "
-               f"min {ev.values.min():.6g}, max {ev.values.max():.6g}; "
+               f"{_range_text(ev.values)}; "
                f"{bound_text(ev.abs_error, ev.bound_kind, f'method {ev.method}')}; "
                f"{ev.seconds:.3g} s" + "".join(f"\nwrote {o}" for o in args.out))
     return EXIT_OK
@@ -585,7 +597,7 @@ def _job_geodesic(args):
     _write(args.out, d, V, C, args, sources=[args.source], kind="distance",
            title=f"geodesic distance ({args.method}) ({name})", names=["geodesic_distance"])
     _say(args, f"geodesic distance ({args.method}) from vertex {args.source} on {name} "
-               f"({lap.n} vertices): max {d.max():.6g}; "
+               f"({lap.n} vertices): {_range_text(d)}; "
                f"{bound_text(np.nan, None, 'an approximation of the smooth geodesic distance, not certified')}; "
                f"{seconds:.3g} s"
                + "".join(f"\nwrote {o}" for o in args.out))

@@ -241,3 +241,14 @@ def test_written_meshes_keep_every_digit(tmp_path, ext, sphere):
         assert np.array_equal(W, V)
     else:                              # libigl's text formats: 15 significant digits
         assert np.max(np.abs(W - V)) <= 1e-14 * np.abs(V).max()
+
+
+def test_cli_summary_reads_finite_values_on_several_components(tmp_path, capsys):
+    from spectral_igl.cli import main
+    from spectral_igl.io import write_mesh
+
+    V, F = icosphere(2)
+    write_mesh(tmp_path / "two.obj", np.vstack([V, V + 5]), np.vstack([F, F + len(V)]))
+    assert main(["geodesic", str(tmp_path / "two.obj"), "--out", str(tmp_path / "g.npy")]) == 0
+    out = capsys.readouterr().out
+    assert "max inf" not in out and "162 vertices infinite" in out
