@@ -252,3 +252,18 @@ def test_cli_summary_reads_finite_values_on_several_components(tmp_path, capsys)
     assert main(["geodesic", str(tmp_path / "two.obj"), "--out", str(tmp_path / "g.npy")]) == 0
     out = capsys.readouterr().out
     assert "max inf" not in out and "162 vertices infinite" in out
+
+
+def test_viewer_times_in_the_shape_units(sphere):
+    pytest.importorskip("pyvista")
+    from spectral_igl.viz import Viewer
+
+    V, F = sphere
+    for s in (1e-3, 1e3):
+        lap = sig.laplacian(s * V, F)
+        v = Viewer(lap, quantity="kernel", filter="heat", off_screen=True)
+        assert v.t == pytest.approx(1e-2 * lap.area(), rel=1e-14)
+        v.close()
+        v = Viewer(lap, quantity="kernel", filter="heat", t=1e-3, time_unit="shape", off_screen=True)
+        assert v.t == pytest.approx(1e-3 * lap.area(), rel=1e-14)
+        v.close()

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_index
+from .._validate import as_index, describe
 from ..approx import METHODS
 from ..filters import FILTERS
-from ..laplacian import Laplacian, laplacian
+from ..laplacian import Laplacian, laplacian, shape_time
 from ..quantity import FILTERED, QUANTITIES, color_meaning, evaluate, uses_time
 from ._backend import NEUTRAL_COLOR, color_kind, colormap, display_available, pyvista, save_png, to_pyvista
 from ._levelsets import add_source_marker, levelset_values, lines_over_surfaces, outer_surface, reached_vertices
@@ -43,7 +43,11 @@ class Viewer:
         One of :data:`spectral_igl.filters.FILTERS` (``"heat"``, ``"diffusion"``,
         ``"biharmonic"``, ...).
     t : float, optional
-        Initial time; default :math:`10^{-2}` times the squared bounding-box diagonal.
+        Initial time, in the units ``time_unit``; default :math:`10^{-2}` times the shape's
+        area (volume\ :sup:`2/3` of a solid), the same on a mesh of any size.
+    time_unit : str
+        Unit of ``t`` (:mod:`spectral_igl.laplacian.units`): ``"absolute"`` (default),
+        ``"shape"``, ``"area"``, ``"volume"`` or ``"h2"``. The slider and ``self.t`` are absolute.
     method : str
         Engine method, one of :data:`spectral_igl.approx.METHODS`.
     source : int
@@ -71,7 +75,7 @@ class Viewer:
 
     def __init__(self, shape, quantity="distance", filter="biharmonic", t=None, method="auto",
                  source=0, n_levels=12, tol=1e-8, off_screen=None, window_size=(900, 800),
-                 weights="auto", diagonal="auto", camera="auto", cmap=None):
+                 weights="auto", diagonal="auto", camera="auto", cmap=None, time_unit="absolute"):
         if quantity not in QUANTITIES:
             raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
         if filter not in FILTERS:
@@ -88,7 +92,7 @@ class Viewer:
             self.lap = shape
         else:
             if not (isinstance(shape, (tuple, list)) and len(shape) == 2):
-                raise TypeError("shape must be (V, F), (V, T) or a Laplacian")
+                raise TypeError(f"shape must be (V, F), (V, T) or a Laplacian, got {describe(shape)}")
             self.lap = laplacian(shape[0], shape[1], weights=weights)
         grid, kind = to_pyvista(self.lap)
         if kind == "points":
@@ -109,8 +113,7 @@ class Viewer:
         self.diagonal = diagonal
         self.cmap = cmap
         self.n_levels = int(n_levels)
-        diag2 = float(np.sum((self.points.max(0) - self.points.min(0)) ** 2))
-        self.t = float(t) if t is not None else 1e-2 * diag2
+        self.t = shape_time(self.lap, 1e-2, "shape") if t is None else shape_time(self.lap, t, time_unit)
         self._t_range = (np.log10(self.t) - 3, np.log10(self.t) + 2)
         self.source = as_index(source, self.lap.n, "source")
         self.last = None
