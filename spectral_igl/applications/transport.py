@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from .._validate import as_int, as_positive, as_signal, as_tol, describe
+from .._validate import as_flag, as_int, as_positive, as_signal, as_tol, describe
 from ..laplacian import as_laplacian
 from .geodesics import HeatGeodesics
 from .heat_steps import PositiveHeat, log_apply
@@ -268,6 +268,7 @@ def wasserstein_distance(lap, mu0, mu1, gamma, kernel: str = "auto", steps: int 
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    return_info = as_flag(return_info, "return_info")
     heat = _kernel(lap, gamma, kernel, steps)
     h = _mean_edge(lap)
     if isinstance(heat, PositiveHeat) and h is not None and gamma < 10.0 * h * h * (1 - 1e-12):
@@ -328,6 +329,7 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, kernel: str = "auto", 
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    return_info = as_flag(return_info, "return_info")
     mus = as_signal(mus, lap.n, "mus", allow_complex=False)
     if mus.ndim != 2 or mus.shape[1] < 1:
         raise ValueError(f"mus must have shape ({lap.n}, k), got shape {mus.shape}")
