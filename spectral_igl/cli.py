@@ -735,12 +735,21 @@ def _job_batch(args):
         collect_inputs(list(args.inputs))
     except (ValueError, TypeError) as err:
         raise CLIError(str(err), EXIT_INPUT) from err
-    summary = run(list(args.inputs), job, args.out, workers=args.workers, scheduler=args.scheduler,
-                  progress=not args.quiet, retries=args.retries, memory_limit=args.memory_limit,
-                  weights=args.weights, mass=args.mass, force=args.force,
-                  retry_failed=args.retry_failed)
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise CLIError(f"cannot write the store {args.out!r}: it is a file, not a directory", EXIT_USAGE)
+    from .collection.store import StoreInUse
+
+    try:
+        summary = run(list(args.inputs), job, args.out, workers=args.workers, scheduler=args.scheduler,
+                      progress=not args.quiet, retries=args.retries, memory_limit=args.memory_limit,
+                      weights=args.weights, mass=args.mass, force=args.force,
+                      retry_failed=args.retry_failed)
+    except StoreInUse as err:
+        raise CLIError(str(err), EXIT_ERROR) from err
     print(f"done {len(summary.done)}, skipped {len(summary.skipped)}, failed {len(summary.failed)} "
           f"({summary.seconds:.1f} s, {summary.workers} workers); store {summary.out}")
+    for name, err in sorted(summary.damaged.items()):
+        print(f"damaged, recomputed: {name}: {err}", file=sys.stderr)
     for name, err in sorted(summary.failed.items()):
         print(f"failed: {name}: {err}", file=sys.stderr)
     return EXIT_OK if summary.ok else EXIT_ERROR
