@@ -39,6 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._validate import describe
+from ..approx import LARGE_T, spectral_operator
 from ..approx.rational import PartialFractions, certifiable, certify, cf_exp, rounding
 from ..filters import Filter, heat
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
@@ -632,6 +633,35 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
     # one (n, m) slab per time, updated in place: the output is the memory, not its copies
     out = np.zeros((u.size, lap.n, idx.size))
     eps = np.empty(u.size)
+    # times so large that the heat has decayed to the projection onto ker L (t lambda_max
+    # beyond LARGE_T): the engine's split, not a common rational fit (whose bound is inf there)
+    ns = int(np.count_nonzero(u * lambda_max(lap) <= LARGE_T))      # u is sorted: a prefix
+    for j in range(ns, u.size):
+        out[j], eps[j] = _large_time_columns(lap, float(u[j]), E, idx, tol)
+    if ns:
+        _rational_columns(lap, u[:ns], E, tol, out[:ns], eps[:ns])
+    if not np.array_equal(inv, np.arange(inv.size)):
+        out = out[inv]
+    return np.moveaxis(out, 0, -1), eps[inv]
+
+
+def _large_time_columns(lap, t: float, E: np.ndarray, idx: np.ndarray, tol: float):
+    """Heat columns at one large time through the engine, and their relative bound.
+
+    The engine bounds each column's B-norm error absolutely (b_i); relative to
+    :math:`\|B^{-1}e_i\|_B \ge 1/\sqrt{B_{ii}}` (Cauchy--Schwarz) it is at most
+    :math:`b_i \sqrt{B_{ii}}`, inflated by a few rounding units for the square root.
+    """
+    op = spectral_operator(lap, heat(t), "auto", tol)
+    K = op.apply_inverse_mass(E)
+    b = np.asarray(op.error_bound if op.error_bound is not None else np.nan, dtype=float).reshape(-1)
+    rel = b * np.sqrt(lap.B.diagonal()[idx]) * (1.0 + 4.0 * np.finfo(float).eps)
+    return K, float(np.max(rel)) if np.all(np.isfinite(rel)) else float("nan")
+
+
+def _rational_columns(lap, u: np.ndarray, E: np.ndarray, tol: float, out: np.ndarray, eps: np.ndarray):
+    """Heat columns at the sorted unique times ``u`` from common rational fits, written into
+    ``out`` (T, n, m), zeros on entry, and their bounds into ``eps`` (T,)."""
     O = out.reshape(u.size, -1)
     Minv = None
     for g, upper, real, fits, e in _heat_plan(lap, u, tol, targets=float(tol)):
@@ -658,9 +688,6 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
                 _accumulate(O[sl], batch)
                 batch, held = [], 0
         _accumulate(O[sl], batch)
-    if not np.array_equal(inv, np.arange(inv.size)):
-        out = out[inv]
-    return np.moveaxis(out, 0, -1), eps[inv]
 
 
 def as_filters(filters):
