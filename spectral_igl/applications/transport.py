@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from .._validate import as_flag, as_int, as_positive, as_signal, as_tol, describe
+from .._validate import as_flag, as_int, as_positive, as_signal, as_tol, check_dense_size, describe
 from ..laplacian import as_laplacian
 from .geodesics import HeatGeodesics
 from .heat_steps import PositiveHeat, log_apply
@@ -35,6 +35,9 @@ class GeodesicKernel:
         if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
             raise ValueError(f"the geodesic kernel needs a triangle or tetrahedral mesh, got a {lap.domain} "
                              "Laplacian; use kernel='heat'")
+        # the distances, their log-kernel, the kernel and a log-sum-exp temporary: (n, n) each
+        check_dense_size(4 * 8.0 * lap.n ** 2, f"the dense ({lap.n}, {lap.n}) geodesic kernel",
+                         "use kernel='heat' (sparse heat steps, O(n) memory)")
         self.n, self.gamma = lap.n, float(gamma)
         self.mass = np.asarray(lap.B.sum(axis=1)).ravel()
         D = lap.cache.fetch("kernel", ("all_pairs_geodesic",), lambda: _all_pairs(lap))

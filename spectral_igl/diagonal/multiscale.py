@@ -38,7 +38,7 @@ import logging
 import numpy as np
 import scipy.linalg as sla
 
-from .._validate import describe
+from .._validate import check_dense_size, describe
 from ..approx import LARGE_T, spectral_operator
 from ..approx.rational import PartialFractions, certifiable, certify, cf_exp, rounding
 from ..filters import Filter, heat
@@ -628,6 +628,10 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
     T = _as_times(times)
     idx = np.asarray(sources, dtype=np.int64).reshape(-1)
     u, inv = np.unique(T, return_inverse=True)
+    # the (T, n, m) output, the deltas, a complex solve and its real and imaginary parts
+    check_dense_size(8.0 * lap.n * idx.size * (T.size + 5), f"{idx.size} heat-kernel columns of length "
+                     f"{lap.n} at {T.size} time(s)", "ask for fewer sources at a time, or for distances or "
+                     "diagonals (kernel_diagonal, hks), which need no columns")
     E = np.zeros((lap.n, idx.size))
     E[idx, np.arange(idx.size)] = 1.0
     # one (n, m) slab per time, updated in place: the output is the memory, not its copies
