@@ -339,6 +339,18 @@ def check_writable(out):
         path.unlink()
 
 
+def _check_source(source, V, C):
+    """Refuse, before any work, a source outside the mesh or one that no element references
+    (an isolated vertex reaches nothing: there is nothing to compute or draw)."""
+    if source >= len(V):
+        raise CLIError(f"--source {source} is out of range: the mesh has {len(V)} vertices", EXIT_USAGE)
+    if C is not None and not np.any(np.asarray(C) == source):
+        lone = len(V) - np.unique(np.asarray(C)).size
+        raise CLIError(f"--source {source} is a vertex that no element references ({lone} of the "
+                       f"{len(V)} vertices are): nothing is reached from it; choose a vertex of the mesh",
+                       EXIT_USAGE)
+
+
 def _laplacian(V, C, args):
     try:
         return laplacian(V, C, weights=args.weights, mass=args.mass)
@@ -424,9 +436,7 @@ def _job_kernel_distance(args):
     V, C, name = _load_shape(args)
     prog.update()
     prog.set_postfix_str("Laplacian")
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     prog.update()
     prog.set_postfix_str(args.job)
@@ -545,9 +555,7 @@ def _job_smooth(args):
 def _job_geodesic(args):
     _check_outputs(args.out, _OUTPUTS)
     V, C, name = _load_shape(args)
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     start = time.perf_counter()
     d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
@@ -574,9 +582,7 @@ def _job_view(args):
             raise CLIError(f"--screenshot must be a .png file, got {args.screenshot!r}", EXIT_USAGE)
         check_writable(args.screenshot)
     V, C, name = _load_shape(args)
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     t = args.time if args.time is not None else _default_time(lap)
     off = args.screenshot is not None
