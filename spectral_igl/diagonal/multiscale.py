@@ -650,7 +650,7 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
 
 
 def _large_time_columns(lap, t: float, E: np.ndarray, idx: np.ndarray, tol: float):
-    """Heat columns at one large time through the engine, and their relative bound.
+    r"""Heat columns at one large time through the engine, and their relative bound.
 
     The engine bounds each column's B-norm error absolutely (b_i); relative to
     :math:`\|B^{-1}e_i\|_B \ge 1/\sqrt{B_{ii}}` (Cauchy--Schwarz) it is at most
