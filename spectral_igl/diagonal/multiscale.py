@@ -425,10 +425,17 @@ def diagonals_from_fits(lap, upper, real, fits, eps) -> MultiDiagonal:
 
 
 # ----------------------------------------------------------------------------- heat
+#: most times in one call (each costs a weighted sum of the solves; 1000 take about 30 s on
+#: 642 vertices)
+MAX_TIMES = 1000
+
+
 def _as_times(times):
     T = np.asarray(times, dtype=float) if not isinstance(times, (str, bytes)) else None
     if T is None or T.ndim > 1 or T.size == 0 or not np.all(np.isfinite(T)) or np.any(T <= 0):
         raise ValueError(f"times must be positive finite numbers (scalar or 1-D), got {describe(times)}")
+    if T.size > MAX_TIMES:
+        raise ValueError(f"times has {T.size} values, more than {MAX_TIMES}: split them over several calls")
     return T.reshape(-1)
 
 

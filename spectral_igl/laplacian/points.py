@@ -330,14 +330,16 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     k_default, bw_default = _DEFAULTS[method]
+    if not isinstance(boundary, (bool, np.bool_)):
+        raise TypeError(f"boundary must be True or False, got {describe(boundary)}")
+    if boundary and method != "delaunay":
+        raise ValueError(f"boundary=True is an option of method='delaunay', not of method={method!r}")
     if method == "delaunay":
         given = [name for name, v in (("t", t), ("radius", radius), ("bandwidth", bandwidth))
                  if v is not None]
         if given:
             raise ValueError(f"{', '.join(given)} set the heat kernel of method='belkin' or "
                              "'liu'; method='delaunay' has no bandwidth")
-        if not isinstance(boundary, (bool, np.bool_)):
-            raise TypeError(f"boundary must be a bool, got {describe(boundary)}")
         k = _check_k(k, k_default, n)
         _check_size(n, k)
         return _delaunay_laplacian(P, k, bool(boundary))
