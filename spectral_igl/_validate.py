@@ -140,6 +140,10 @@ def as_signal(f, n: int, name: str = "f", allow_complex: bool = True,
         raise ValueError(f"{name} must have shape ({n},) or ({n}, k), got {describe(a)}")
     if a.ndim == 2 and a.shape[1] == 0:
         raise ValueError(f"{name} has no columns: got {describe(a)}; pass (n,) or (n, k) with k >= 1")
+    target = np.dtype(np.complex128 if a.dtype.kind == "c" else np.float64)
+    if a.dtype != target:
+        check_dense_size(float(target.itemsize) * a.size, f"{name} of shape {a.shape} as {target}",
+                         "pass fewer columns at a time")
     a = a.astype(np.complex128 if a.dtype.kind == "c" else np.float64, copy=False)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} contains NaN or inf")

@@ -377,6 +377,18 @@ def check_writable(out):
         path.unlink()
 
 
+def _check_source(source, V, C):
+    """Refuse, before any work, a source outside the mesh or one that no element references
+    (an isolated vertex reaches nothing: there is nothing to compute or draw)."""
+    if source >= len(V):
+        raise CLIError(f"--source {source} is out of range: the mesh has {len(V)} vertices", EXIT_USAGE)
+    if C is not None and not np.any(np.asarray(C) == source):
+        lone = len(V) - np.unique(np.asarray(C)).size
+        raise CLIError(f"--source {source} is a vertex that no element references ({lone} of the "
+                       f"{len(V)} vertices are): nothing is reached from it; choose a vertex of the mesh",
+                       EXIT_USAGE)
+
+
 def _laplacian(V, C, args):
     try:
         return laplacian(V, C, weights=args.weights, mass=args.mass)
@@ -465,9 +477,7 @@ def _job_kernel_distance(args):
     V, C, name = _load_shape(args)
     prog.update()
     prog.set_postfix_str("Laplacian")
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     prog.update()
     prog.set_postfix_str(args.job)
@@ -586,9 +596,7 @@ def _job_smooth(args):
 def _job_geodesic(args):
     _check_outputs(args.out, _OUTPUTS)
     V, C, name = _load_shape(args)
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     start = time.perf_counter()
     t, _ = _given_time(lap, args.time, args.time_unit)
@@ -616,9 +624,7 @@ def _job_view(args):
             raise CLIError(f"--screenshot must be a .png file, got {args.screenshot!r}", EXIT_USAGE)
         check_writable(args.screenshot)
     V, C, name = _load_shape(args)
-    if args.source >= len(V):
-        raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
-                       EXIT_USAGE)
+    _check_source(args.source, V, C)
     lap = _laplacian(V, C, args)
     t, _ = _given_time(lap, args.time, args.time_unit, 1e-2)
     off = args.screenshot is not None
@@ -788,12 +794,21 @@ def _job_batch(args):
         collect_inputs(list(args.inputs))
     except (ValueError, TypeError) as err:
         raise CLIError(str(err), EXIT_INPUT) from err
-    summary = run(list(args.inputs), job, args.out, workers=args.workers, scheduler=args.scheduler,
-                  progress=not args.quiet, retries=args.retries, memory_limit=args.memory_limit,
-                  weights=args.weights, mass=args.mass, force=args.force,
-                  retry_failed=args.retry_failed)
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise CLIError(f"cannot write the store {args.out!r}: it is a file, not a directory", EXIT_USAGE)
+    from .collection.store import StoreInUse
+
+    try:
+        summary = run(list(args.inputs), job, args.out, workers=args.workers, scheduler=args.scheduler,
+                      progress=not args.quiet, retries=args.retries, memory_limit=args.memory_limit,
+                      weights=args.weights, mass=args.mass, force=args.force,
+                      retry_failed=args.retry_failed)
+    except StoreInUse as err:
+        raise CLIError(str(err), EXIT_ERROR) from err
     print(f"done {len(summary.done)}, skipped {len(summary.skipped)}, failed {len(summary.failed)} "
           f"({summary.seconds:.1f} s, {summary.workers} workers); store {summary.out}")
+    for name, err in sorted(summary.damaged.items()):
+        print(f"damaged, recomputed: {name}: {err}", file=sys.stderr)
     for name, err in sorted(summary.failed.items()):
         print(f"failed: {name}: {err}", file=sys.stderr)
     return EXIT_OK if summary.ok else EXIT_ERROR

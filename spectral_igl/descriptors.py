@@ -422,6 +422,9 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
                              note="truncated eigen-expansion (Aubry et al.'s definition) from eigenpairs "
                                   "that are not certified: no error bound")
     else:
+        if k != 100:
+            raise ValueError(f"option k={k!r} is used only by method='eigen' (the truncation), not by "
+                             f"method {method!r}")
         filts = [_wks_filter(float(e), sigma) for e in Ev]
         md = None
         if _family(lap, method, Ev.size, kwargs):

@@ -23,7 +23,7 @@ import numbers
 
 import numpy as np
 
-from ._validate import as_positive, describe
+from ._validate import as_flag, as_positive, describe
 
 __all__ = ["Filter", "heat", "wave", "commute_time", "biharmonic", "polyharmonic",
            "mexican_hat", "multiscale", "as_filter", "check_filter", "FILTERS", "by_name"]
@@ -76,8 +76,8 @@ class Filter:
             raise TypeError(f"fn must be a callable of an array, got {describe(fn)}")
         self.fn = fn
         self.name = name or getattr(fn, "__name__", "filter")
-        self.singular = bool(singular)
-        self.is_complex = bool(is_complex)
+        self.singular = as_flag(singular, "singular")
+        self.is_complex = as_flag(is_complex, "is_complex")
         self.kind = kind
         self.params = dict(params or {})
         self.derivative = derivative
@@ -107,13 +107,22 @@ class Filter:
             out = np.zeros(s.shape, dtype=np.complex128 if self.is_complex else np.float64)
             pos = s > 0
             if np.any(pos):
-                out[pos] = self.fn(s[pos])
+                out[pos] = self._values(s[pos])
             return out if out.ndim else out[()]
-        out = np.asarray(self.fn(s))
-        if out.shape != s.shape:
-            out = np.broadcast_to(out, s.shape).copy()
+        out = self._values(s)
         if not self.is_complex and np.iscomplexobj(out):
             raise ValueError(f"filter {self.name!r} returned complex values; pass is_complex=True")
+        return out
+
+    def _values(self, s: np.ndarray) -> np.ndarray:
+        """``fn(s)`` with the shape of ``s``: a scalar (a constant filter) is broadcast,
+        any other shape refused (broadcasting it would give every eigenvalue the same value)."""
+        out = np.asarray(self.fn(s))
+        if out.shape != s.shape:
+            if out.ndim != 0:
+                raise ValueError(f"filter {self.name!r} must map an array of eigenvalues of shape {s.shape} "
+                                 f"to the same shape (it is applied elementwise), got {describe(out)}")
+            out = np.broadcast_to(out, s.shape).copy()
         return out
 
     @property

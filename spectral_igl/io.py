@@ -2,8 +2,11 @@
 and meshes with per-vertex fields (vtu, vtk, ply)."""
 from __future__ import annotations
 
+import contextlib
 import os
 import re
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -53,14 +56,16 @@ def read_mesh(path, polygons: bool = False):
     if not path.is_file():
         raise FileNotFoundError(f"no such mesh file: {path}")
     ext = path.suffix.lower()
-    check_mesh_file(path)
+    if ext != ".off":             # an OFF file is checked as it is parsed, below
+        check_mesh_file(path)
     import igl
 
     if ext == ".mesh":
         try:
-            V, T, _ = igl.readMESH(str(path))
+            with _captured_stderr() as said:
+                V, T, _ = igl.readMESH(str(path))
         except (RuntimeError, MemoryError) as err:
-            raise ValueError(f"could not read tetrahedral mesh {path}: {err}") from err
+            raise ValueError(f"could not read tetrahedral mesh {path}: {err}{_said(said)}") from err
         if T.size == 0:
             raise ValueError(f"{path} holds no tetrahedra")
         V = as_points(V, f"vertices of {path.name}", dims=(3,))
@@ -71,7 +76,7 @@ def read_mesh(path, polygons: bool = False):
     if not isinstance(polygons, (bool, np.bool_)):
         raise TypeError(f"polygons must be a bool, got {type(polygons).__name__}")
     if polygons and ext in (".obj", ".off"):
-        V, faces = (_read_obj_polygons if ext == ".obj" else _read_off_polygons)(path)
+        V, faces = (_read_obj_polygons if ext == ".obj" else _parse_off)(path)
         if len(V) == 0 or len(faces) == 0:
             raise ValueError(f"{path} holds no faces")
         V = as_points(V, f"vertices of {path.name}", dims=(3,))
@@ -83,14 +88,53 @@ def read_mesh(path, polygons: bool = False):
         if min(int(f.min()) for f in F) < 0 or top >= len(V):
             raise ValueError(f"faces of {path.name} index vertices outside [0, {len(V)})")
         return V, (np.vstack(F) if len(sizes) == 1 else F)
+    if ext == ".off":        # libigl misreads comments inside an OFF file: parsed here
+        V, faces = _parse_off(path)
+        if len(V) == 0 or len(faces) == 0:
+            raise ValueError(f"{path} holds no triangles")
+        V = as_points(V, f"vertices of {path.name}", dims=(3,))
+        return V, as_cells(_fan(faces), len(V), f"faces of {path.name}", sizes=(3,))
     try:
-        V, F = igl.read_triangle_mesh(str(path))
+        with _captured_stderr() as said:
+            V, F = igl.read_triangle_mesh(str(path))
     except (RuntimeError, MemoryError) as err:
-        raise ValueError(f"could not read mesh {path}: not a valid {ext[1:].upper()} file") from err
+        raise ValueError(f"could not read mesh {path}: not a valid {ext[1:].upper()} file"
+                         f"{_said(said)}") from err
     if V.size == 0 or F.size == 0:
         raise ValueError(f"{path} holds no triangles")
     V = as_points(V, f"vertices of {path.name}", dims=(3,))
     return V, as_cells(F, len(V), f"faces of {path.name}", sizes=(3,))
+
+
+@contextlib.contextmanager
+def _captured_stderr():
+    """Collect what C++ code writes to the process's stderr (file descriptor 2) meanwhile.
+
+    libigl's readers print each line they do not understand (for a file of garbage, the
+    garbage); the text is kept for the error message instead. Yields a list that holds the
+    text once the block ends.
+    """
+    said = []
+    try:
+        saved = os.dup(2)
+    except OSError:          # no stderr to redirect
+        yield said
+        return
+    with tempfile.TemporaryFile() as tmp:
+        sys.stderr.flush()
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            said.append(tmp.read(4096).decode("utf-8", errors="replace"))
+
+
+def _said(said) -> str:
+    text = " ".join("".join(said).split())
+    return f" (the reader said: {text[:300]!r})" if text else ""
 
 
 _FIELD_FORMATS = (".vtu", ".vtk", ".ply")
@@ -190,20 +234,31 @@ def _text_lines(path):
             yield no, raw.decode("utf-8", errors="replace").strip()
 
 
+def _check_text(path, kind: str) -> None:
+    """Refuse binary data in a text format (a NUL byte or mostly undecodable bytes in the first
+    64 KiB) before a reader echoes it."""
+    with open(path, "rb") as fh:
+        head = fh.read(65536)
+    if b"\0" in head or head.decode("utf-8", errors="replace").count("\ufffd") > len(head) // 10:
+        _fail(path, 0, f"it holds binary data, not {kind} text")
+
+
 def _check_obj(path):
-    nv = 0
+    _check_text(path, "OBJ")
+    nv = nf = 0
     for no, line in _text_lines(path):
-        if line.startswith("v "):
-            parts = line.split()
-            if len(parts) < 4:
-                _fail(path, no, f"vertex with {len(parts) - 1} coordinate(s), need 3: {line[:80]!r}")
+        toks = line.split()
+        key = toks[0] if toks else ""
+        if key == "v":
+            if len(toks) < 4:
+                _fail(path, no, f"vertex with {len(toks) - 1} coordinate(s), need 3: {line[:80]!r}")
             try:
-                [float(x) for x in parts[1:4]]
+                [float(x) for x in toks[1:4]]
             except ValueError:
                 _fail(path, no, f"vertex coordinates are not numbers: {line[:80]!r}")
             nv += 1
-        elif line.startswith("f "):
-            refs = line.split()[1:]
+        elif key == "f":
+            refs = toks[1:]
             if len(refs) < 3:
                 _fail(path, no, f"face with {len(refs)} vertex/vertices, need at least 3 "
                                 f"(truncated line?): {line[:80]!r}")
@@ -216,56 +271,119 @@ def _check_obj(path):
                 if i == 0 or i > nv or i < -nv:
                     _fail(path, no, f"face vertex index {i} is outside the {nv} vertices defined before "
                                     f"it (OBJ indices start at 1): {line[:80]!r}")
+            nf += 1
+    if nv == 0 or nf == 0:
+        _fail(path, 0, f"it has {nv} vertex ('v') and {nf} face ('f') lines")
 
 
-def _check_off(path):
+def _off_lines(path):
+    """``(line number, tokens)`` of the non-empty lines of an OFF file, comments (``#`` to the
+    end of the line) removed."""
+    for no, line in _text_lines(path):
+        toks = line.split("#", 1)[0].split()
+        if toks:
+            yield no, toks
+
+
+class _Tokens:
+    """The tokens of an OFF file line by line, where an item may continue on the next lines
+    (a face line wrapped over several lines; libigl reads these too)."""
+
+    def __init__(self, path):
+        self.path = path
+        self.lines = _off_lines(path)
+        self.no = 0
+
+    def line(self, what):
+        item = next(self.lines, None)
+        if item is None:
+            _fail(self.path, 0, f"the file ends before {what}")
+        self.no = item[0]
+        return list(item[1])
+
+    def item(self, need, what):
+        """At least ``need(tokens)`` tokens, starting on a new line; returns them and the
+        number of the item's first line."""
+        toks = self.line(what)
+        first = self.no
+        while len(toks) < need(toks):
+            toks += self.line(what)
+        return toks, first
+
+
+def _parse_off(path):
+    """Vertices (n, 3) and faces (lists of 0-based indices) of an ASCII OFF file, read by
+    tokens: comments anywhere, the counts on the header line or after it, vertex and face
+    lines wrapped over several lines, and trailing values (normals, colours, texture
+    coordinates) after the ones needed. A malformed file is refused with its line."""
+    _check_text(path, "OFF")
     size = path.stat().st_size
-    lines = ((no, line) for no, line in _text_lines(path) if line and not line.startswith("#"))
-    no, head = next(lines, (1, ""))
-    kw = head.split()[0] if head.split() else ""
-    if not kw.endswith("OFF"):
-        _fail(path, no, f"an OFF file starts with 'OFF', got {head[:80]!r}")
-    rest = head.split()[1:]
-    if not rest:
-        no, counts_line = next(lines, (no + 1, ""))
-        rest = counts_line.split()
+    tokens = _Tokens(path)
+    head = tokens.line("its header")
+    kw = head[0]
+    if not kw.upper().endswith("OFF"):
+        _fail(path, tokens.no, f"an OFF file starts with 'OFF', got {' '.join(head)[:80]!r}")
+    prefix = kw[:-3]            # [ST][C][N][4][n]OFF: 4 and n change the vertices' dimension
+    if "4" in prefix or prefix.endswith("n"):
+        _fail(path, tokens.no, f"{kw!r} (4-D or n-D vertices) is not supported: vertices must have 3 coordinates")
+    rest = head[1:]
+    if rest[:1] == ["BINARY"]:
+        _fail(path, tokens.no, "binary OFF is not supported; write it as ASCII OFF or PLY")
+    no = tokens.no
+    while len(rest) < 2:
+        rest += tokens.line("its vertex and face counts")
+        no = tokens.no
     try:
         nv, nf = int(rest[0]), int(rest[1])
-    except (ValueError, IndexError):
+    except ValueError:
         _fail(path, no, f"the counts line must give the numbers of vertices and faces, got {' '.join(rest)[:80]!r}")
     if nv < 0 or nf < 0:
         _fail(path, no, f"negative vertex or face count ({nv}, {nf})")
     if (nv + nf) * _MIN_TEXT_BYTES > size:
         _fail(path, no, f"the header claims {nv} vertices and {nf} faces, more than a file of "
                         f"{size} bytes can hold")
-    for _ in range(nv):
-        item = next(lines, None)
-        if item is None:
-            _fail(path, 0, f"the file ends before its {nv} vertices")
-        vno, line = item
-        parts = line.split()
+    V = np.empty((nv, 3))
+    for i in range(nv):
+        toks, vno = tokens.item(lambda t: 3, f"its {nv} vertices")
         try:
-            [float(x) for x in parts[:3]]
+            V[i] = [float(x) for x in toks[:3]]
         except ValueError:
-            _fail(path, vno, f"vertex coordinates are not numbers: {line[:80]!r}")
-        if len(parts) < 3:
-            _fail(path, vno, f"vertex with {len(parts)} coordinate(s), need 3: {line[:80]!r}")
+            _fail(path, vno, f"vertex coordinates are not numbers: {' '.join(toks)[:80]!r}")
+    faces = []
     for _ in range(nf):
-        item = next(lines, None)
-        if item is None:
-            _fail(path, 0, f"the file ends before its {nf} faces")
-        fno, line = item
-        parts = line.split()
+        toks, fno = tokens.item(lambda t: 1 + max(_face_size(t[0]), 0), f"its {nf} faces")
+        k = _face_size(toks[0])
+        if k < 0:
+            _fail(path, fno, f"a face is 'k i1 ... ik' with integers, got {' '.join(toks)[:80]!r}")
+        if k < 3:
+            _fail(path, fno, f"face with {k} vertex/vertices, need at least 3: {' '.join(toks)[:80]!r}")
         try:
-            k = int(parts[0])
-            idx = [int(x) for x in parts[1:1 + k]]
-        except (ValueError, IndexError):
-            _fail(path, fno, f"a face line is 'k i1 ... ik' with integers, got {line[:80]!r}")
-        if k < 3 or len(idx) < k:
-            _fail(path, fno, f"face with {min(k, len(idx))} vertex/vertices, need at least 3 "
-                             f"(truncated line?): {line[:80]!r}")
+            idx = [int(x) for x in toks[1:1 + k]]
+        except ValueError:
+            _fail(path, fno, f"a face is 'k i1 ... ik' with integers, got {' '.join(toks)[:80]!r}")
         if min(idx) < 0 or max(idx) >= nv:
-            _fail(path, fno, f"face vertex index outside [0, {nv}): {line[:80]!r}")
+            _fail(path, fno, f"face vertex index outside [0, {nv}): {' '.join(toks)[:80]!r}")
+        faces.append(idx)
+    return V, faces
+
+
+def _face_size(tok) -> int:
+    """The vertex count that starts a face, -1 when it is not an integer."""
+    try:
+        return int(tok)
+    except ValueError:
+        return -1
+
+
+def _fan(faces) -> np.ndarray:
+    """Triangles of polygons (lists of indices) by fans from each polygon's first vertex, as
+    libigl triangulates them."""
+    tris = [(f[0], f[j], f[j + 1]) for f in faces for j in range(1, len(f) - 1)]
+    return np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+
+
+def _check_off(path):
+    _parse_off(path)
 
 
 def _check_ply(path):
@@ -303,6 +421,7 @@ def _check_stl(path):
 
 
 def _check_medit(path):
+    _check_text(path, "MEDIT")
     size = path.stat().st_size
     lines = ((no, line) for no, line in _text_lines(path) if line and not line.startswith("#"))
     for no, line in lines:
@@ -328,11 +447,22 @@ def check_mesh_file(path) -> None:
     """Check the structure of a mesh file before a C++ reader sees it.
 
     Headers that claim more elements than the file can hold, truncated or out-of-range
-    face lines (OBJ, OFF) raise a ``ValueError`` naming the file and the line, instead of
-    a silent drop or an allocation failure inside the reader.
+    face lines (OBJ, OFF), binary data in a text format, and an OBJ file without vertex or
+    face lines raise a ``ValueError`` naming the file and the line, instead of a silent
+    drop, an echo of the bytes or an allocation failure inside the reader; so do a
+    directory, a missing file and an unsupported extension.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path} is a directory, not a mesh file")
+    if not path.is_file():
+        raise ValueError(f"no such mesh file: {path}")
     check = _CHECKS.get(path.suffix.lower())
+    if check is None and path.suffix.lower() not in _TRI:
+        raise ValueError(f"unsupported mesh format {path.suffix.lower()!r} for {path}; expected one of "
+                         f"{', '.join(_TRI + ('.mesh',))}")
     if check is not None:
         try:
             check(path)
@@ -350,26 +480,6 @@ def _read_obj_polygons(path: Path):
                 nv = len(V)  # negative indices count back from the vertices read so far
                 faces.append([i - 1 if i > 0 else nv + i for i in idx])
     return np.asarray(V, dtype=np.float64).reshape(-1, 3), faces
-
-
-def _read_off_polygons(path: Path):
-    """Vertices and faces of an OFF file, faces untouched."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        toks = [ln.split("#")[0].split() for ln in fh]
-    toks = [t for t in toks if t]
-    try:
-        head = toks[0]
-        if head[0].upper().endswith("OFF"):
-            head = head[1:] or toks[1]
-            body = toks[2:] if not toks[0][1:] else toks[1:]
-        else:
-            body = toks[1:]
-        nv, nf = int(head[0]), int(head[1])
-        V = np.array([[float(x) for x in t[:3]] for t in body[:nv]], dtype=np.float64)
-        faces = [[int(x) for x in t[1:1 + int(t[0])]] for t in body[nv:nv + nf]]
-    except (IndexError, ValueError) as err:
-        raise ValueError(f"could not read mesh {path}: not a valid OFF file") from err
-    return V.reshape(-1, 3), faces
 
 
 def _point_data(fields, n: int, ply: bool) -> dict:

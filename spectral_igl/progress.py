@@ -34,6 +34,8 @@ def enabled(on: bool = True):
     >>> with progress.enabled(False):
     ...     progress.progress_bar(3, "work").update()
     """
+    if not isinstance(on, (bool, np.bool_)):
+        raise TypeError(f"on must be True or False, got {type(on).__name__} {on!r}")
     token = _DEFAULT.set(bool(on))
     try:
         yield

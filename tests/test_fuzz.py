@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fuzz_cases import FUNCTIONS, POOLS  # noqa: E402
+from fuzz_cases import FUNCTIONS, MUST_REFUSE, POOLS  # noqa: E402
 
 LONG = os.environ.get("SPECTRAL_IGL_FUZZ", "") == "long"
 EXAMPLES = 300 if LONG else 100
@@ -109,10 +109,12 @@ def _cases(draw, name):
     params = FUNCTIONS[name]
     kwargs = _valid(name)
     picked = draw(st.lists(st.integers(0, len(params) - 1), min_size=1, max_size=2, unique=True))
+    refuse = False
     for i in picked:
         p, kind, _ = params[i]
         kwargs[p] = draw(_hostile(kind))
-    return {"name": name, "kwargs": kwargs}
+        refuse = refuse or kind in MUST_REFUSE
+    return {"name": name, "kwargs": kwargs, "refuse": refuse}
 
 
 def _fail(case, res):
@@ -140,6 +142,8 @@ def test_hostile_input(worker, name):
             with open(LOG, "a") as fh:
                 fh.write(_fail(case, res) + "\n")
         assert res["outcome"] in ("ok", "refused"), _fail(case, res)
+        # a value that is never valid (a flag other than True/False) must not be taken
+        assert not case["refuse"] or res["outcome"] == "refused", _fail(case, dict(res, outcome="accepted"))
 
     check()
 

@@ -1,11 +1,9 @@
 """Diffusion basis functions and feature points (survey §7.2)."""
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 
-from .._validate import as_indices, as_nonnegative, as_positive, as_signal, describe
+from .._validate import as_choice, as_indices, as_int, as_positive, as_real_in, as_signal
 from ..approx import SpectralOperator
 from ..descriptors import auto_diffusion_function
 from ..filters import heat
@@ -122,7 +120,8 @@ def graph_extrema(lap, f, persistence: float = 0.0):
     f = as_signal(f, lap.n, "f", allow_complex=False)
     if f.ndim != 1:
         raise ValueError(f"f must have shape ({lap.n},), got shape {f.shape}")
-    persistence = as_nonnegative(persistence, "persistence")
+    # no extremum but the global ones persists over more than the range of f
+    persistence = as_real_in(persistence, "persistence", 0.0, 1.0)
     n = lap.n
     rank = _rank(f)
     A = lap.L.tocoo()
@@ -177,14 +176,17 @@ def feature_points(lap, n_eigenfunctions: int = 6, t: float = 0.1, source: str =
     """
 
     lap = as_laplacian(lap)
-    if source not in ("eigenfunctions", "adf"):
-        raise ValueError(f"source must be 'eigenfunctions' or 'adf', got {source!r}")
+    as_choice(source, "source", ("eigenfunctions", "adf"))
+    t = as_positive(t, "t")
+    n_eigenfunctions = as_int(n_eigenfunctions, "n_eigenfunctions", lo=1, hi=max(lap.n - lap.n_components, 1))
+    persistence = as_real_in(persistence, "persistence", 0.0, 1.0)
+    unused = {"eigenfunctions": {"t": (t, 0.1), "method": (method, "auto")},
+              "adf": {"n_eigenfunctions": (n_eigenfunctions, 6)}}[source]
+    for name, (value, default) in unused.items():
+        if value != default:
+            raise ValueError(f"option {name}={value!r} is not used with source={source!r}")
     if source == "adf":
-        t = as_positive(t, "t")
         return graph_extrema(lap, auto_diffusion_function(lap, t, method=method), persistence)[1]
-    if isinstance(n_eigenfunctions, bool) or not isinstance(n_eigenfunctions, numbers.Integral) \
-            or n_eigenfunctions < 1:
-        raise ValueError(f"n_eigenfunctions must be a positive integer, got {describe(n_eigenfunctions)}")
     c = lap.n_components
     lam, X = eigs(lap, c + int(n_eigenfunctions))
     pts = []

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe, is_mesh_object
+from .._validate import as_flag, as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe, is_mesh_object
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, as_laplacian
@@ -463,6 +463,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
 
     lap = _as_laplacian(lap_or_mesh)
     src = as_indices(source, lap.n, "source")
+    normalize = as_flag(normalize, "normalize")
     if src.size != 1:
         raise ValueError(f"source must be a single vertex for Varadhan's formula, got {src.size}")
     V, C = lap.data["V"], _cells(lap)

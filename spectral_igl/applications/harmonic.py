@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_indices, as_int, describe
+from .._validate import as_indices, as_int, check_magnitude, describe
 from ..laplacian import Laplacian, as_laplacian
 from ..linalg import factorize
 
@@ -31,6 +31,7 @@ def constraints(lap: Laplacian, fixed, values):
     vals = vals.astype(np.float64)
     if not np.all(np.isfinite(vals)):
         raise ValueError("values contains NaN or inf")
+    check_magnitude(vals, "values", hint="rescale them (the solution is linear in the values)")
     missing = np.setdiff1d(np.arange(lap.n_components), lap.components[fixed])
     if missing.size:
         raise ValueError(f"{missing.size} connected component(s) have no fixed vertex (e.g. the one "

@@ -6,7 +6,7 @@ import numbers
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_positive, check_dense_size, describe
+from .._validate import as_flag, as_positive, check_dense_size, describe
 from ..laplacian.mesh import clean_mesh, cotan_stiffness, element_measures, full_mass
 
 __all__ = ["mean_curvature_flow"]
@@ -92,6 +92,8 @@ def mean_curvature_flow(V, F, dt: float = 1e-3, steps: int = 10, conformal: bool
     if V.shape[1] != 3:
         raise ValueError(f"mean_curvature_flow needs a 3-D triangle mesh, got V {V.shape}, F {F.shape}")
     dt = as_positive(dt, "dt")
+    conformal, normalize = as_flag(conformal, "conformal"), as_flag(normalize, "normalize")
+    history = as_flag(history, "history")
     if dt > 1.0:
         raise ValueError(f"dt must be at most 1 (it is relative to the initial area), got {dt}")
     if isinstance(steps, bool) or not isinstance(steps, (numbers.Integral, np.integer)) or not 0 <= steps <= 10000:

@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from .._validate import as_int, as_positive, as_signal, as_tol, describe
+from .._validate import as_flag, as_int, as_positive, as_signal, as_tol, check_dense_size, describe
 from ..laplacian import as_laplacian
 from .geodesics import HeatGeodesics
 from .heat_steps import PositiveHeat, log_apply
@@ -35,6 +35,9 @@ class GeodesicKernel:
         if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
             raise ValueError(f"the geodesic kernel needs a triangle or tetrahedral mesh, got a {lap.domain} "
                              "Laplacian; use kernel='heat'")
+        # the distances, their log-kernel, the kernel and a log-sum-exp temporary: (n, n) each
+        check_dense_size(4 * 8.0 * lap.n ** 2, f"the dense ({lap.n}, {lap.n}) geodesic kernel",
+                         "use kernel='heat' (sparse heat steps, O(n) memory)")
         self.n, self.gamma = lap.n, float(gamma)
         self.mass = np.asarray(lap.B.sum(axis=1)).ravel()
         D = lap.cache.fetch("kernel", ("all_pairs_geodesic",), lambda: _all_pairs(lap))
@@ -81,6 +84,33 @@ def _density(lap, mu, name, mass):
     if total <= 0:
         raise ValueError(f"{name} has zero mass")
     return mu / total
+
+
+#: relative difference of a component's mass between two densities taken as rounding
+COMPONENT_MASS_RTOL = 1e-9
+
+
+def _check_components(lap, named) -> None:
+    """Refuse densities that put different fractions of their mass on a connected component.
+
+    No mass crosses between components (the kernel is exactly 0 there), so no transport
+    plan exists and Sinkhorn's scalings diverge (NaN) whatever gamma. ``named``: a list of
+    ``(name, density)`` normalised to unit mass.
+    """
+    if lap.n_components == 1 or len(named) < 2:
+        return
+    a = lap.mass
+    shares = [(name, np.bincount(lap.components, weights=a * mu, minlength=lap.n_components))
+              for name, mu in named]
+    (n0, s0), rest = shares[0], shares[1:]
+    for name, s in rest:
+        gap = np.abs(s - s0)
+        if gap.max() > COMPONENT_MASS_RTOL:
+            c = int(np.argmax(gap))
+            raise ValueError(f"{n0} and {name} put different fractions of their mass on connected component "
+                             f"{c} ({s0[c]:.6g} and {s[c]:.6g}; the shape has {lap.n_components} components): "
+                             "no mass moves between components, so no transport plan exists; compare the "
+                             "densities on each component separately, or give them equal mass on each")
 
 
 def _kernel(lap, gamma, kernel, steps, heat=None):
@@ -177,6 +207,8 @@ def sinkhorn(lap, mu0, mu1, gamma, heat=None, kernel: str = "auto", steps: int =
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    _check_components(lap, [("mu0", _density(lap, mu0, "mu0", lap.mass)),
+                            ("mu1", _density(lap, mu1, "mu1", lap.mass))])
     heat = _kernel(lap, gamma, kernel, steps, heat)
     mu0 = _density(lap, mu0, "mu0", heat.mass)
     mu1 = _density(lap, mu1, "mu1", heat.mass)
@@ -268,6 +300,9 @@ def wasserstein_distance(lap, mu0, mu1, gamma, kernel: str = "auto", steps: int 
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    return_info = as_flag(return_info, "return_info")
+    _check_components(lap, [("mu0", _density(lap, mu0, "mu0", lap.mass)),
+                            ("mu1", _density(lap, mu1, "mu1", lap.mass))])
     heat = _kernel(lap, gamma, kernel, steps)
     h = _mean_edge(lap)
     if isinstance(heat, PositiveHeat) and h is not None and gamma < 10.0 * h * h * (1 - 1e-12):
@@ -328,6 +363,7 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, kernel: str = "auto", 
     lap = as_laplacian(lap)
     gamma = as_positive(gamma, "gamma")
     tol = _check_iter(max_iter, tol)
+    return_info = as_flag(return_info, "return_info")
     mus = as_signal(mus, lap.n, "mus", allow_complex=False)
     if mus.ndim != 2 or mus.shape[1] < 1:
         raise ValueError(f"mus must have shape ({lap.n}, k), got shape {mus.shape}")
@@ -339,6 +375,8 @@ def wasserstein_barycenter(lap, mus, gamma, weights=None, kernel: str = "auto", 
         if alpha.shape != (k,) or not np.all(np.isfinite(alpha)) or np.any(alpha < 0) or alpha.sum() <= 0:
             raise ValueError(f"weights must be {k} non-negative numbers with a positive sum, got {describe(weights)}")
         alpha = alpha / alpha.sum()
+    _check_components(lap, [(f"mus[:, {i}]", _density(lap, mus[:, i], f"mus[:, {i}]", lap.mass))
+                            for i in range(k)])
     heat = _kernel(lap, gamma, kernel, steps)
     a = heat.mass
     mus = np.stack([_density(lap, mus[:, i], f"mus[:, {i}]", a) for i in range(k)], axis=1)

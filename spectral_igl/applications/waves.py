@@ -1,8 +1,8 @@
 """The Schrödinger (wave) equation through the engine."""
 from __future__ import annotations
 
-from .._validate import as_signal, describe
-from ..approx import apply_filter
+from .._validate import as_choice, as_real_in, as_signal, as_tol, describe
+from ..approx import METHODS, apply_filter
 from ..filters import wave
 from ..laplacian import as_laplacian
 
@@ -39,7 +39,9 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     h = as_signal(h, lap.n, "h")
     if isinstance(t, bool) or not isinstance(t, numbers.Real):
         raise TypeError(f"t must be a real number, got {describe(t)}")
-    t = float(t)
+    t = as_real_in(t, "t")
+    as_choice(method, "method", METHODS)     # checked here too: t = 0 returns before the engine
+    as_tol(tol, "tol")
     if t == 0.0:
         return h.astype(complex)
     if t < 0:  # e^{+i|t|L} h is the conjugate of e^{-i|t|L} conj(h): L is real

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import describe
+from .._validate import as_flag, describe
 from .._version import __version__
 from .jobs import Job
-from .store import check_name, clean_partial, open_root, read_record, write_record
+from .store import check_name, check_record, clean_partial, lock_store, open_root, read_record, write_record
 
 __all__ = ["run", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
            "inspect_shape", "input_hash", "estimate_nnz"]
@@ -52,6 +52,7 @@ class RunSummary:
     done: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
     failed: dict = field(default_factory=dict)     # name -> error text
+    damaged: dict = field(default_factory=dict)    # name -> what was damaged (recomputed)
     seconds: float = 0.0
     workers: int = 0
 
@@ -62,6 +63,8 @@ class RunSummary:
     def __str__(self) -> str:
         text = (f"{len(self.done)} done, {len(self.skipped)} skipped, {len(self.failed)} failed "
                 f"in {self.seconds:.1f} s on {self.workers} worker(s); store {self.out}")
+        for name, err in sorted(self.damaged.items()):
+            text += f"\n  damaged (recomputed): {name}: {err}"
         for name, err in sorted(self.failed.items()):
             text += f"\n  failed: {name}: {err}"
         return text
@@ -402,8 +405,18 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     parallel on the workers); its memory is estimated (:func:`estimate_memory`). Shapes
     that fit a worker's limit run in parallel, largest first; the others run afterwards
     one at a time (on a local cluster: in a single worker given the memory of all). The
-    Laplacian's caches are cleared after every shape. One run per store at a time: a run
-    starts by removing leftovers of interrupted writes.
+    Laplacian's caches are cleared after every shape.
+
+    A stored result is skipped only when its group matches its completion record (every
+    array's shape, dtype and SHA-256, see :func:`~spectral_igl.collection.store.check_record`);
+    a damaged group (a deleted chunk, truncated metadata) is listed in
+    ``RunSummary.damaged`` and recomputed.
+
+    One run per store at a time: a run holds the store's lock
+    (:class:`~spectral_igl.collection.store.lock_store`), and a second run on the same
+    store raises ``StoreInUse`` naming the holder before any work; the lock of a run
+    that was killed is detected (its process is gone) and taken over. A run then removes
+    leftovers of interrupted writes.
     """
     t_start = time.perf_counter()
     shapes = collect_inputs(inputs)
@@ -414,7 +427,17 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     options = {"weights": str(weights), "mass": str(mass)}
     ident = {"job": job.kind, "params": job.params, "laplacian": options}
     key = hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()
+    for flag, value in (("progress", progress), ("force", force), ("retry_failed", retry_failed)):
+        as_flag(value, flag)
     open_root(out)
+    with lock_store(out):
+        return _run_locked(shapes, job, out, key, options, workers, scheduler, progress, retries,
+                           memory_limit, force, retry_failed, t_start)
+
+
+def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, retries, memory_limit,
+                force, retry_failed, t_start) -> RunSummary:
+    """The body of :func:`run`, with the store's lock held."""
     clean_partial(out)
     summary = RunSummary(out=out)
     silence = logging.ERROR if not progress else logging.WARNING
@@ -428,6 +451,12 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
         prev = read_record(out, s.name)
         current = (not force and prev is not None and prev.get("input_hash") == h
                    and prev.get("job_key") == key)
+        problem = None
+        if (current and prev["status"] == "done") or (prev is None and (Path(out) / s.name).is_dir()):
+            problem = check_record(out, s.name)[2]
+            if problem is not None:
+                summary.damaged[s.name] = problem
+                current = False
         if current and prev["status"] == "done":
             summary.skipped.append(s.name)
         elif current and not retry_failed and not prev.get("transient", True):

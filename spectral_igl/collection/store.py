@@ -9,23 +9,35 @@ Layout of ``out`` (a directory; Zarr format 3)::
 A shape's group is first written completely under ``.partial/`` (arrays, then attributes,
 then fsync), and only then renamed to ``out/<name>``: a rename within one file system is
 atomic, so a reader sees either the whole previous record, nothing, or the whole new one.
+
+The group's attributes are its completion record: with ``status`` they list every array's
+shape, dtype and SHA-256 (``checksums``). :func:`check_record` compares the stored arrays
+against it, so a group damaged later (a chunk deleted, a file truncated; Zarr would read a
+missing chunk as zeros) is reported by :func:`load` and recomputed by a rerun, never read
+as a result.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
 import shutil
+import socket
+import time
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ShapeResult", "Loaded", "load", "write_record", "read_record", "clean_partial",
-           "check_name", "PARTIAL", "LAYOUT", "BOUND_SUFFIX"]
+__all__ = ["ShapeResult", "Loaded", "load", "write_record", "read_record", "check_record",
+           "clean_partial", "check_name", "lock_store", "StoreInUse", "PARTIAL", "LOCK", "LAYOUT",
+           "BOUND_SUFFIX"]
 
 PARTIAL = ".partial"
+#: the lock file of a run in progress (JSON: host, pid, process start time, token)
+LOCK = ".lock"
 LAYOUT = 1
 #: the array ``<key>_abs_error`` holds the per-entry bound of the stored result ``<key>``
 BOUND_SUFFIX = "_abs_error"
@@ -89,6 +101,132 @@ def open_root(out, mode="a"):
     return root
 
 
+class StoreInUse(RuntimeError):
+    """Another run holds the store's lock."""
+
+
+def _proc_stat(pid: int):
+    """``(state, start time)`` of process ``pid`` from ``/proc`` (Linux), ``(None, None)`` elsewhere."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+        return fields[0], int(fields[19])
+    except (OSError, ValueError, IndexError):
+        return None, None
+
+
+def _start_time(pid: int):
+    """Start time of process ``pid`` (clock ticks since boot, Linux), None where unknown."""
+    return _proc_stat(pid)[1]
+
+
+def _alive(owner: dict) -> bool:
+    """Whether the process that wrote the lock ``owner`` on this host still runs.
+
+    A pid that exists but started at another time than the recorded one has been reused
+    by another process after the owner died.
+    """
+    pid = owner.get("pid")
+    if not isinstance(pid, int) or pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:      # exists, owned by another user
+        pass
+    state, now = _proc_stat(pid)
+    if state in ("Z", "X"):      # killed, not yet reaped by its parent
+        return False
+    start = owner.get("start")
+    return start is None or now is None or start == now
+
+
+def _read_lock(path: Path):
+    try:
+        owner = json.loads(path.read_text())
+        return owner if isinstance(owner, dict) else {}
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return {}
+
+
+class lock_store:
+    """Hold the lock of the store ``out`` for one run (a context manager).
+
+    The lock is the file ``out/.lock`` holding the host, pid and start time of the run that
+    holds it, created atomically (written aside, then hard-linked into place, which fails
+    when it exists). A second run on the same store is refused with :class:`StoreInUse`
+    naming the holder. A lock left by a run that was killed (its process no longer runs
+    on this host, or its pid now belongs to another process) is stale and taken over. A
+    lock held from another host cannot be checked from here: the message says which file
+    to remove once that run is known to be dead.
+    """
+
+    def __init__(self, out):
+        self.path = Path(out) / LOCK
+        self.token = uuid.uuid4().hex
+        self.owner = {"host": socket.gethostname(), "pid": os.getpid(), "start": _start_time(os.getpid()),
+                      "token": self.token, "since": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+        self.took_over = None
+
+    def _link(self) -> bool:
+        tmp = self.path.with_name(f"{LOCK}.{self.token}")
+        tmp.write_text(json.dumps(self.owner))
+        try:
+            os.link(tmp, self.path)
+            return True
+        except FileExistsError:
+            return False
+        finally:
+            tmp.unlink(missing_ok=True)
+
+    def acquire(self):
+        for _ in range(3):
+            if self._link():
+                return self
+            owner = _read_lock(self.path)
+            if owner is None:          # released meanwhile
+                continue
+            same_host = owner.get("host") == self.owner["host"]
+            if owner and not (same_host and not _alive(owner)):
+                where = "" if same_host else (" on another host: if that run is dead, remove "
+                                              f"{str(self.path)!r}")
+                raise StoreInUse(f"the store {str(self.path.parent)!r} is in use by another run (host "
+                                 f"{owner.get('host')}, pid {owner.get('pid')}, since {owner.get('since')})"
+                                 f"{where}; wait for it to finish, or write to another store")
+            # stale (its process is gone) or unreadable: move it aside, check it is the one
+            # judged stale, and try again
+            aside = self.path.with_name(f"{LOCK}.stale.{self.token}")
+            try:
+                os.rename(self.path, aside)
+            except FileNotFoundError:
+                continue
+            if (_read_lock(aside) or {}) != owner:    # another run took it over meanwhile
+                try:
+                    os.link(aside, self.path)
+                except FileExistsError:
+                    pass
+                aside.unlink(missing_ok=True)
+                continue
+            aside.unlink(missing_ok=True)
+            self.took_over = owner
+        raise StoreInUse(f"could not take the lock {str(self.path)!r}: other runs keep taking it")
+
+    def release(self):
+        owner = _read_lock(self.path)
+        if owner and owner.get("token") == self.token:
+            self.path.unlink(missing_ok=True)
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+        return False
+
+
 def clean_partial(out) -> int:
     """Remove leftovers of interrupted writes; returns how many were removed."""
     part = Path(out) / PARTIAL
@@ -137,11 +275,16 @@ def write_record(out, name, attrs: dict, arrays: dict | None = None) -> None:
     tag = uuid.uuid4().hex[:12]
     tmp = root / PARTIAL / f"{name}.{tag}"
     g = zarr.open_group(str(tmp), mode="w", zarr_format=3)
+    sums = {}
     for key, value in arrays.items():
         a = np.ascontiguousarray(value)
-        g.create_array(str(key), data=a, chunks=a.shape if a.size else "auto")
+        # every chunk is written, zeros included, so that a missing chunk means damage
+        g.create_array(str(key), data=a, chunks=a.shape if a.size else "auto",
+                       config={"write_empty_chunks": True})
+        sums[str(key)] = _checksum(a)
     meta = dict(attrs)
     meta["arrays"] = sorted(str(k) for k in arrays)
+    meta["checksums"] = sums
     g.attrs.update(jsonable(meta))
     _fsync_tree(tmp)
     dest = root / name
@@ -159,21 +302,89 @@ def write_record(out, name, attrs: dict, arrays: dict | None = None) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
-def read_record(out, name) -> dict | None:
-    """The attributes of ``out/<name>`` if it is a complete record, else None."""
-    path = Path(out) / name
+def _checksum(a: np.ndarray) -> dict:
+    """Shape, dtype and SHA-256 of an array's bytes (C order): its entry in the completion record."""
+    a = np.ascontiguousarray(a)
+    return {"shape": list(a.shape), "dtype": a.dtype.str, "sha256": hashlib.sha256(a.tobytes()).hexdigest()}
+
+
+def _attributes(path: Path):
+    """``(attrs, problem)`` read from ``path/zarr.json``: problem is None, or says what is wrong."""
     meta = path / "zarr.json"
     if not meta.is_file():
-        return None
+        return None, "no zarr.json (the group's metadata is missing)"
     try:
-        attrs = json.loads(meta.read_text()).get("attributes", {})
-    except (OSError, ValueError):
+        doc = json.loads(meta.read_text())
+    except (OSError, ValueError) as err:
+        return None, f"zarr.json is unreadable or truncated ({type(err).__name__}: {err})"
+    attrs = doc.get("attributes") if isinstance(doc, dict) else None
+    if not isinstance(attrs, dict) or attrs.get("status") not in ("done", "failed"):
+        return None, "zarr.json holds no completion record (status 'done' or 'failed')"
+    return attrs, None
+
+
+def read_record(out, name) -> dict | None:
+    """The attributes of ``out/<name>`` if its completion record is readable, else None.
+
+    Only the metadata is read; :func:`check_record` also verifies the arrays.
+    """
+    attrs, problem = _attributes(Path(out) / name)
+    if problem is not None:
         return None
-    if attrs.get("status") not in ("done", "failed"):
-        return None
-    if any(not (path / a / "zarr.json").is_file() for a in attrs.get("arrays", [])):
+    if any(not (Path(out) / name / a / "zarr.json").is_file() for a in attrs.get("arrays", [])):
         return None
     return attrs
+
+
+def check_record(out, name, data: bool = True):
+    """Verify ``out/<name>`` against its completion record.
+
+    Parameters
+    ----------
+    out : path of the store
+    name : str
+        Group name.
+    data : bool
+        Also read every array and compare its shape, dtype and SHA-256 with the record
+        (``False``: only that each array's metadata and chunk files are present).
+
+    Returns
+    -------
+    attrs : dict or None
+        The record's attributes (None when they cannot be read).
+    arrays : dict of str -> ndarray
+        The verified arrays (empty with ``data=False``).
+    problem : str or None
+        What is damaged; None for an intact group.
+    """
+    zarr = _zarr()
+    path = Path(out) / name
+    attrs, problem = _attributes(path)
+    if problem is not None:
+        return None, {}, problem
+    sums = attrs.get("checksums", {})
+    arrays = {}
+    for key in attrs.get("arrays", []):
+        where = path / key
+        if not (where / "zarr.json").is_file():
+            return attrs, {}, f"array {key!r} is missing (no {key}/zarr.json)"
+        want = sums.get(key)     # None in records written before checksums were kept
+        if want is not None and int(np.prod(want["shape"])) and not any(p.is_file() for p in where.rglob("*") if p.name != "zarr.json"):
+            return attrs, {}, f"array {key!r} has no data chunks (deleted)"
+        if not data:
+            continue
+        try:
+            a = np.asarray(zarr.open_array(str(where), mode="r")[...])
+        except Exception as err:  # noqa: BLE001 - any failure to decode is damage
+            return attrs, {}, f"array {key!r} cannot be read ({type(err).__name__}: {err})"
+        if want is not None and _checksum(a) != want:
+            got = _checksum(a)
+            what = ("shape/dtype " + f"{tuple(got['shape'])} {got['dtype']}, recorded "
+                    f"{tuple(want['shape'])} {want['dtype']}" if got["shape"] != want["shape"]
+                    or got["dtype"] != want["dtype"] else "checksum differs from the recorded one")
+            return attrs, {}, f"array {key!r} is damaged: {what}"
+        arrays[key] = a
+    return attrs, arrays, None
 
 
 @dataclass
@@ -256,24 +467,27 @@ def load(out, arrays: bool = True) -> Loaded:
         ``job``, ``params``, ``timings``, ``bounds``...).
     failures : list of dict
         One dict per failed shape: ``name``, ``source``, ``error``, ``input_hash``...
-        Groups left half-written by an interruption are never listed.
+        A group damaged after it was written (a deleted chunk, a truncated ``zarr.json``,
+        an array whose checksum differs from its completion record) is listed here with
+        ``damaged: True`` and the problem in ``error``, never among the results; a rerun
+        of :func:`~spectral_igl.collection.run` recomputes it. Groups left half-written by
+        an interruption (under ``.partial``) are never listed.
     """
-    zarr = _zarr()
     root = Path(out)
     open_root(out, mode="r")
+    if not isinstance(arrays, (bool, np.bool_)):
+        raise TypeError(f"arrays must be True or False, got {type(arrays).__name__} {arrays!r}")
     results, failures = {}, []
     for p in sorted(root.iterdir()):
         if not p.is_dir() or p.name.startswith("."):
             continue
-        attrs = read_record(out, p.name)
-        if attrs is None:
+        attrs, data, problem = check_record(out, p.name, data=bool(arrays))
+        if problem is not None:
+            failures.append(dict(attrs or {}, name=p.name, status="damaged", damaged=True,
+                                 error=f"damaged record: {problem}"))
             continue
         if attrs["status"] == "failed":
             failures.append(dict(attrs, name=p.name))
             continue
-        data = {}
-        if arrays:
-            g = zarr.open_group(str(p), mode="r")
-            data = {a: np.asarray(g[a][...]) for a in attrs.get("arrays", [])}
         results[p.name] = ShapeResult(p.name, data, attrs)
     return Loaded(results, failures)

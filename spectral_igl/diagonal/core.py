@@ -6,6 +6,10 @@ of any single solve. Methods:
 
 ``"exact"``
     n applications of the engine (in blocks): exact up to the engine's certified bound.
+    Its cost is n engine columns, minutes for a filter the engine applies slowly (a
+    multiscale filter on 642 vertices: 158 s); the cost is measured on a few columns first
+    and a call estimated above :data:`EXACT_TIME_LIMIT` seconds is refused with the
+    estimate, before the rest of the work.
     For small and moderate n.
 ``"dense"``
     Dense generalized eigen-decomposition (n <= 8000): the ground truth. The
@@ -44,6 +48,7 @@ of any single solve. Methods:
 from __future__ import annotations
 
 import logging
+import time
 
 import numpy as np
 
@@ -71,6 +76,14 @@ METHODS = ("auto", "exact", "dense", "eigen", "selinv", "probing")
 EXACT_MAX = 3000
 #: columns per engine call in ``"exact"`` and ``"probing"``
 BLOCK = 64
+#: seconds above which method="exact" is refused up front (its estimated cost is measured on
+#: a few columns); raise it to run longer exact diagonals
+EXACT_TIME_LIMIT = 60.0
+#: default of ``samples`` (an explicit other value with a method that takes none is refused)
+DEFAULT_SAMPLES = 16
+#: the methods that read each option of :func:`kernel_diagonal` (``"auto"`` may pick any)
+OPTION_METHODS = {"k": ("eigen", "probing"), "distance": ("probing",), "max_colours": ("probing",),
+                  "samples": ("probing", "selinv")}
 #: the probing estimate of every entry: this many times the largest error measured at the samples
 PROBING_SAFETY = 10.0
 #: the rounding model of the dense eigendecomposition, in units of ``n * eps * max|phi(lambda)|``
@@ -129,6 +142,15 @@ def check_diagonal_options(n: int, method="auto", k=None, distance=None, samples
     max_colours = None if max_colours is None else as_int(max_colours, "max_colours", lo=1, hi=n)
     tol = as_tol(tol, "tol")
     seed = as_int(seed, "seed", lo=0)
+    given = {"k": k, "distance": distance, "max_colours": max_colours,
+             "samples": None if samples == DEFAULT_SAMPLES else samples}
+    for name, value in given.items():
+        if value is not None and method != "auto" and method not in OPTION_METHODS[name]:
+            raise ValueError(f"option {name}={value!r} is not used by diagonal method {method!r} (it applies "
+                             f"to {' and '.join(repr(m) for m in OPTION_METHODS[name])})")
+    if method == "eigen" and k == 0:
+        raise ValueError("k must be an integer in [1, n] for method 'eigen' (the number of eigenpairs of "
+                         "the truncated expansion), got 0")
     if method == "dense":
         check_dense_size(6 * 8.0 * n * n, f"the dense ({n}, {n}) eigenproblem of method='dense'",
                          "use method='selinv' or 'probing'")
@@ -251,6 +273,34 @@ def _reciprocal_rounding(lap) -> np.ndarray:
     return (theta / (1.0 - theta) + gamma(1)) * (1.0 + gamma(1))
 
 
+def _exact_cost(G, n: int, dtype) -> float:
+    """Estimated seconds of the n engine columns of method="exact", measured on a few.
+
+    One column first; when n times its cost is not clearly below the limit, a block of 8
+    (per-column cost falls in blocks, so this is the estimate used).
+    """
+    def seconds(k):
+        E = np.zeros((n, k), dtype=dtype)
+        E[np.arange(k), np.arange(k)] = 1.0
+        t0 = time.perf_counter()
+        G(E)
+        return time.perf_counter() - t0
+
+    est = n * seconds(1)
+    if est > EXACT_TIME_LIMIT / 4 and n > 8:
+        est = n / 8 * seconds(8)
+    return est
+
+
+def _check_exact_cost(G, n: int, dtype) -> None:
+    est = _exact_cost(G, n, dtype)
+    if est > EXACT_TIME_LIMIT:
+        raise ValueError(f"method='exact' would take about {est:.0f} s here ({n} engine columns, cost measured "
+                         f"on the first few), beyond EXACT_TIME_LIMIT = {EXACT_TIME_LIMIT:g} s: use "
+                         f"method='selinv' (certified, a few factorizations) or 'probing' (measured error), or "
+                         f"raise spectral_igl.diagonal.core.EXACT_TIME_LIMIT")
+
+
 def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours, tol, engine_method, seed,
               progress=None):
     n = lap.n
@@ -330,6 +380,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
     op = spectral_operator(lap, filt, engine_method, tol)
     G = _gram_apply(lap, op, delta)
     if method == "exact":
+        _check_exact_cost(G, n, dtype)
         diag = np.empty(n, dtype=dtype)
         bound = np.zeros(n)
         w = column_entry_error(lap, 1.0, delta)     # entry i of column i per unit B-norm error

@@ -38,7 +38,8 @@ import logging
 import numpy as np
 import scipy.linalg as sla
 
-from .._validate import describe
+from .._validate import check_dense_size, describe
+from ..approx import LARGE_T, spectral_operator
 from ..approx.rational import PartialFractions, certifiable, certify, cf_exp, rounding
 from ..filters import Filter, heat
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
@@ -424,10 +425,17 @@ def diagonals_from_fits(lap, upper, real, fits, eps) -> MultiDiagonal:
 
 
 # ----------------------------------------------------------------------------- heat
+#: most times in one call (each costs a weighted sum of the solves; 1000 take about 30 s on
+#: 642 vertices)
+MAX_TIMES = 1000
+
+
 def _as_times(times):
     T = np.asarray(times, dtype=float) if not isinstance(times, (str, bytes)) else None
     if T is None or T.ndim > 1 or T.size == 0 or not np.all(np.isfinite(T)) or np.any(T <= 0):
         raise ValueError(f"times must be positive finite numbers (scalar or 1-D), got {describe(times)}")
+    if T.size > MAX_TIMES:
+        raise ValueError(f"times has {T.size} values, more than {MAX_TIMES}: split them over several calls")
     return T.reshape(-1)
 
 
@@ -627,11 +635,44 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
     T = _as_times(times)
     idx = np.asarray(sources, dtype=np.int64).reshape(-1)
     u, inv = np.unique(T, return_inverse=True)
+    # the (T, n, m) output, the deltas, a complex solve and its real and imaginary parts
+    check_dense_size(8.0 * lap.n * idx.size * (T.size + 5), f"{idx.size} heat-kernel columns of length "
+                     f"{lap.n} at {T.size} time(s)", "ask for fewer sources at a time, or for distances or "
+                     "diagonals (kernel_diagonal, hks), which need no columns")
     E = np.zeros((lap.n, idx.size))
     E[idx, np.arange(idx.size)] = 1.0
     # one (n, m) slab per time, updated in place: the output is the memory, not its copies
     out = np.zeros((u.size, lap.n, idx.size))
     eps = np.empty(u.size)
+    # times so large that the heat has decayed to the projection onto ker L (t lambda_max
+    # beyond LARGE_T): the engine's split, not a common rational fit (whose bound is inf there)
+    ns = int(np.count_nonzero(u * lambda_max(lap) <= LARGE_T))      # u is sorted: a prefix
+    for j in range(ns, u.size):
+        out[j], eps[j] = _large_time_columns(lap, float(u[j]), E, idx, tol)
+    if ns:
+        _rational_columns(lap, u[:ns], E, tol, out[:ns], eps[:ns])
+    if not np.array_equal(inv, np.arange(inv.size)):
+        out = out[inv]
+    return np.moveaxis(out, 0, -1), eps[inv]
+
+
+def _large_time_columns(lap, t: float, E: np.ndarray, idx: np.ndarray, tol: float):
+    r"""Heat columns at one large time through the engine, and their relative bound.
+
+    The engine bounds each column's B-norm error absolutely (b_i); relative to
+    :math:`\|B^{-1}e_i\|_B \ge 1/\sqrt{B_{ii}}` (Cauchy--Schwarz) it is at most
+    :math:`b_i \sqrt{B_{ii}}`, inflated by a few rounding units for the square root.
+    """
+    op = spectral_operator(lap, heat(t), "auto", tol)
+    K = op.apply_inverse_mass(E)
+    b = np.asarray(op.error_bound if op.error_bound is not None else np.nan, dtype=float).reshape(-1)
+    rel = b * np.sqrt(lap.B.diagonal()[idx]) * (1.0 + 4.0 * np.finfo(float).eps)
+    return K, float(np.max(rel)) if np.all(np.isfinite(rel)) else float("nan")
+
+
+def _rational_columns(lap, u: np.ndarray, E: np.ndarray, tol: float, out: np.ndarray, eps: np.ndarray):
+    """Heat columns at the sorted unique times ``u`` from common rational fits, written into
+    ``out`` (T, n, m), zeros on entry, and their bounds into ``eps`` (T,)."""
     O = out.reshape(u.size, -1)
     Minv = None
     for g, upper, real, fits, e in _heat_plan(lap, u, tol, targets=float(tol)):
@@ -658,9 +699,6 @@ def heat_columns(lap, times, sources, tol: float = 1e-8):
                 _accumulate(O[sl], batch)
                 batch, held = [], 0
         _accumulate(O[sl], batch)
-    if not np.array_equal(inv, np.arange(inv.size)):
-        out = out[inv]
-    return np.moveaxis(out, 0, -1), eps[inv]
 
 
 def as_filters(filters):

@@ -170,6 +170,34 @@ def drop_negative_weights(L: sp.spmatrix) -> tuple[sp.csr_matrix, int]:
     return L, int(np.count_nonzero(bad))
 
 
+#: relative asymmetry of a mass matrix taken as rounding (beyond it B is refused, not symmetrised)
+MASS_ASYMMETRY = 1e-10
+
+
+def _real_matrix(A, name: str) -> sp.csr_matrix:
+    """``A`` as a real CSR matrix; complex or non-numeric entries are refused (a cast would drop
+    the imaginary part)."""
+    try:
+        M = sp.csr_matrix(A)
+    except (TypeError, ValueError) as err:
+        raise TypeError(f"{name} must be a real sparse or dense matrix, got {type(A).__name__}") from err
+    if M.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be real, got a {M.shape} matrix of dtype {M.dtype}")
+    return M
+
+
+def _check_symmetric(B: sp.csr_matrix, name: str) -> None:
+    """Refuse a matrix that differs from its transpose beyond rounding."""
+    B = sp.csr_matrix(B, dtype=np.float64)
+    if B.shape[0] != B.shape[1] or B.nnz == 0:
+        return
+    asym = abs(B - B.T).max()
+    top = abs(B).max()
+    if asym > MASS_ASYMMETRY * top:
+        raise ValueError(f"{name} must be symmetric, but |{name} - {name}^T| reaches {asym:.3g} "
+                         f"(largest entry {top:.3g})")
+
+
 def _symmetrize(A: sp.spmatrix) -> sp.csr_matrix:
     A = sp.csr_matrix(A, dtype=np.float64)
     A = ((A + A.T) * 0.5).tocsr()
@@ -235,18 +263,21 @@ def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
                    adjacency: sp.spmatrix | None = None, *, _symmetric: bool = False) -> Laplacian:
     """Build a :class:`Laplacian` from a stiffness ``L`` (PSD) and a mass ``B`` (SPD).
 
-    ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0.
+    ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0; ``B``
+    must be symmetric up to rounding (:data:`MASS_ASYMMETRY`), and both must be real.
     This is the one place where every constructor's matrices are normalised.
     Components come from ``adjacency`` (e.g. the mesh's elements) when given, else from
     the nonzero pattern of ``L``; a cotangent weight that happens to be exactly zero
     must not split a connected mesh. ``_symmetric=True`` is a constructor's promise that
     ``L`` equals ``L.T`` entry for entry, so :math:`(L + L^T)/2 = L` needs no transpose.
     """
+    L, B = _real_matrix(L, "L"), _real_matrix(B, "B")
     L = _canonical(L) if _symmetric else _symmetrize(L)
     n = L.shape[0]
     if L.shape != (n, n):
         raise ValueError(f"L must be square, got shape {L.shape}")
     L = _zero_row_sums(L)
+    _check_symmetric(B, "B")
     B = _symmetrize(B)
     if B.shape != (n, n):
         raise ValueError(f"B must have shape {(n, n)}, got {B.shape}")

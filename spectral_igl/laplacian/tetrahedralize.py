@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_cells, as_mesh_arrays, as_points, as_positive, as_real_in
+from .._validate import as_cells, as_flag, as_mesh_arrays, as_points, as_positive, as_real_in
 from .mesh import element_measures
 
 __all__ = ["tetrahedralize"]
@@ -67,8 +67,7 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
             raise ValueError(f"edge_length_abs = {edge_length_abs:g} is below {MIN_EDGE_FAC:g} x the bounding-box "
                              f"diagonal ({diag:.3g}): about {(1 / MIN_EDGE_FAC) ** 3:.0e} tetrahedra or more")
     epsilon = as_real_in(epsilon, "epsilon", 1e-6, 1.0)
-    if optimize not in (True, False) or quiet not in (True, False):
-        raise TypeError(f"optimize and quiet must be bools, got {optimize!r}, {quiet!r}")
+    optimize, quiet = as_flag(optimize, "optimize"), as_flag(quiet, "quiet")
     if element_measures(V, F).max() <= 0:
         raise ValueError("F has no face of positive area")
     # fTetWild is given only the vertices the faces use (unreferenced ones stall it)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_array, as_positive, describe
+from .._validate import as_array, as_positive, check_dense_size, describe
 from ._operator import Laplacian, make_laplacian
 
 __all__ = ["voxel_laplacian"]
@@ -18,6 +18,11 @@ def _as_spacing(spacing) -> np.ndarray:
     if s.shape != (3,) or s.dtype.kind not in "iuf":
         raise ValueError(f"spacing must be a positive number or 3 positive numbers, got {describe(s)}")
     return np.array([as_positive(x, f"spacing[{a}]") for a, x in enumerate(s.tolist())])
+
+
+def _check_grid(nbytes: float, shape) -> None:
+    check_dense_size(nbytes, f"the voxel Laplacian of a grid of shape {shape}",
+                     "crop the mask to the shape's bounding box or coarsen the grid")
 
 
 def voxel_laplacian(mask, spacing=1.0) -> Laplacian:
@@ -56,6 +61,9 @@ def voxel_laplacian(mask, spacing=1.0) -> Laplacian:
     (24, 3.0)
     """
     m = as_array(mask, "mask")
+    # an int64 voxel number per grid cell and boolean temporaries (then, per True voxel,
+    # its six face couplings and coordinates: checked below)
+    _check_grid(10.0 * m.size, m.shape)
     if m.dtype.kind == "b":
         pass
     elif m.dtype.kind in "iu" and np.all((m == 0) | (m == 1)):
@@ -70,6 +78,7 @@ def voxel_laplacian(mask, spacing=1.0) -> Laplacian:
     n = int(m.sum())
     if n == 0:
         raise ValueError(f"mask has no True voxel ({describe(m)})")
+    _check_grid(10.0 * m.size + 200.0 * n, m.shape)
     number = np.full(m.shape, -1, dtype=np.int64)
     number[m] = np.arange(n)
     vol = float(np.prod(h))

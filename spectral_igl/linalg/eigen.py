@@ -8,13 +8,13 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from .._validate import as_int, as_tol, check_dense_size, describe
+from .._validate import as_flag, as_int, as_tol, check_dense_size, describe
 from ..accuracy import weakest
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
 from ..laplacian.units import dimension
 from ..progress import progress_bar
 from . import ldlt
-from .factor import factorize
+from .factor import check_backend, factorize
 from .solves import ldlt_factor
 
 __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
@@ -128,6 +128,9 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     tol = as_tol(tol, "tol", allow_zero=True)
     if not isinstance(return_info, (bool, np.bool_)):
         raise TypeError(f"return_info must be True or False, got {describe(return_info)}")
+    backend = check_backend(backend)
+    if progress is not None:
+        as_flag(progress, "progress")
     # the (n, k) eigenvectors and ARPACK's (n, ncv) Lanczos basis, ncv about 2k
     check_dense_size(8.0 * n * (3 * k + 32), f"{k} eigenvectors of length {n} (with the Lanczos basis)",
                      "ask for fewer pairs, or use the spectrum-free engine (apply_filter, "

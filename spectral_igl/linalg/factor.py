@@ -17,9 +17,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._validate import as_flag, describe
 from . import ldlt
 
-__all__ = ["factorize", "available_backends", "Factor", "BACKENDS"]
+__all__ = ["factorize", "available_backends", "check_backend", "Factor", "BACKENDS"]
 
 log = logging.getLogger(__name__)
 
@@ -40,21 +41,40 @@ def available_backends() -> list[str]:
     return out
 
 
+#: how to install the backends that are optional dependencies
+INSTALL = {"cholespy": "pip install cholespy", "pypardiso": "pip install pypardiso (or spectral-igl[fast])"}
+
+
+def check_backend(backend) -> str:
+    """Validate a sparse-solver backend name against those importable here.
+
+    A known backend that is not installed is refused with the command that installs it,
+    before any work.
+    """
+    valid = ("auto",) + tuple(available_backends())
+    if isinstance(backend, str) and backend in BACKENDS and backend not in valid:
+        raise ValueError(f"backend {backend!r} is not installed here: {INSTALL.get(backend, '')}; "
+                         f"available: {valid}")
+    if not isinstance(backend, str) or backend not in valid:
+        raise ValueError(f"backend must be one of {valid}, got {describe(backend)}")
+    return backend
+
+
 class Factor:
     """A factorized sparse matrix. ``solve(b)`` solves ``A x = b``."""
 
     def __init__(self, A: sp.spmatrix, backend: str = "auto", spd: bool = True):
         A = sp.csr_matrix(A)
         n = A.shape[0]
+        spd = as_flag(spd, "spd")
         if A.shape != (n, n):
             raise ValueError(f"matrix to factorize must be square, got shape {A.shape}")
         self.n = n
         self.dtype = np.complex128 if np.iscomplexobj(A.data) else np.float64
+        backend = check_backend(backend)
         if backend == "auto":
             backend = "cholespy" if (spd and self.dtype == np.float64
                                      and "cholespy" in available_backends()) else "superlu"
-        if backend not in BACKENDS:
-            raise ValueError(f"backend must be 'auto' or one of {BACKENDS}, got {backend!r}")
         if backend not in ("superlu", "ldlt") and self.dtype != np.float64:
             backend = "superlu"
         self.backend = backend

@@ -21,23 +21,15 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .._validate import as_signal, check_finite_result, describe
+from .._validate import as_flag, as_signal, check_finite_result, describe
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from . import ldlt
-from .factor import available_backends, factorize
+from .factor import check_backend, factorize
 
 log = logging.getLogger(__name__)
 
 __all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache"]
-
-
-def check_backend(backend) -> str:
-    """Validate a sparse-solver backend name against those importable here."""
-    valid = ("auto",) + tuple(available_backends())
-    if not isinstance(backend, str) or backend not in valid:
-        raise ValueError(f"backend must be one of {valid}, got {describe(backend)}")
-    return backend
 
 
 def _ldlt_safe(lap: Laplacian, beta, theta) -> bool:
@@ -112,6 +104,7 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto", keep:
     lap = as_laplacian(lap)
     beta, theta = _scalar(beta, "beta"), _scalar(theta, "theta")
     backend = check_backend(backend)
+    keep = as_flag(keep, "keep")
     if theta == 0:
         raise ValueError(f"theta must be nonzero: theta B + beta L is singular for theta = 0 (constants "
                          f"are in the kernel of L), got theta={theta}; use pseudo_solve for L")
