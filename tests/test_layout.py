@@ -231,3 +231,20 @@ def test_scan_finds_a_scratch_cycle_of_each_kind(tmp_path, kind):
         (root / rel).write_text(text)
     cycle = find_cycle(import_graph(list(_modules(root))))
     assert (cycle is not None) == cyclic, cycle
+
+
+@pytest.mark.parametrize("name,path", [(m[0], m[1]) for m in MODULES if m[2]],
+                         ids=[m[0] or "__init__" for m in MODULES if m[2]])
+def test_package_roots_only_gather_names(name, path):
+    """A room's ``__init__`` holds its docstring, imports and ``__all__``: the machinery lives
+    in named modules, where a reader opening the room finds it."""
+    tree = ast.parse(path.read_text(), str(path))
+    for k, node in enumerate(tree.body):
+        if k == 0 and isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            continue
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            continue
+        targets = node.targets if isinstance(node, ast.Assign) else \
+            [node.target] if isinstance(node, ast.AugAssign) else []
+        assert [getattr(t, "id", None) for t in targets] == ["__all__"], \
+            f"{path.relative_to(ROOT.parent)}:{node.lineno} holds more than imports and __all__"
