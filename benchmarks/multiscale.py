@@ -76,7 +76,7 @@ def run_task(args):
     out = {"task": args.task, "n": n, "chol": chol}
     t0 = time.perf_counter()
     if args.task == "hks":
-        from spectral_igl.diagonal.multiscale import heat_diagonals
+        from spectral_igl.families import heat_diagonals
 
         md = heat_diagonals(lap, times)
         out["time"] = time.perf_counter() - t0
@@ -98,7 +98,7 @@ def run_task(args):
         E = np.linspace(np.log(lam[1]), np.log(lam[300]), args.T)
         t0 = time.perf_counter()
         from spectral_igl.descriptors import _wks_filter   # noqa: the filter WKS uses
-        from spectral_igl.diagonal.multiscale import family_diagonals
+        from spectral_igl.families import family_diagonals
 
         sigma = 7.0 * (E[1] - E[0])
         filts = [_wks_filter(float(e), sigma) for e in E]

@@ -249,38 +249,6 @@ def sphere_biharmonic_distance(theta, lmax=3000):
 
 
 # ---- critical points that matter: cancelling pairs of low persistence ---------------------
-def _merge_pairs(order, f, nbr_ptr, nbr_idx):
-    """0-dimensional persistence of the sweep in ``order``: (extremum, merge vertex, persistence)."""
-    n = len(order)
-    parent = -np.ones(n, dtype=np.int64)
-    birth = np.arange(n)
-
-    def find(x):
-        root = x
-        while parent[root] != root:
-            root = parent[root]
-        while parent[x] != root:
-            parent[x], x = root, parent[x]
-        return root
-
-    pos = np.empty(n, dtype=np.int64)
-    pos[order] = np.arange(n)
-    pairs = []
-    for v in order:
-        nb = nbr_idx[nbr_ptr[v]:nbr_ptr[v + 1]]
-        roots = {find(u) for u in nb if parent[u] >= 0}
-        if not roots:
-            parent[v] = v
-            continue
-        roots = sorted(roots, key=lambda r: pos[birth[r]])  # oldest first
-        keep = roots[0]
-        parent[v] = keep
-        for r in roots[1:]:
-            pairs.append((int(birth[r]), int(v), abs(float(f[v] - f[birth[r]]))))
-            parent[r] = keep
-    return pairs
-
-
 def persistent_critical_points(V, F, f, fraction=0.02):
     r"""Critical points of ``f`` after cancelling extremum-saddle pairs of low persistence.
 
@@ -300,6 +268,7 @@ def persistent_critical_points(V, F, f, fraction=0.02):
     import scipy.sparse as sp
 
     from spectral_igl import critical_points
+    from spectral_igl.applications.basis import merge_pairs
 
     f = np.asarray(f, dtype=float)
     n = len(f)
@@ -313,8 +282,8 @@ def persistent_critical_points(V, F, f, fraction=0.02):
     maxs = set(np.asarray(cp.maxima).tolist())
     sad = {int(i): int(k) for i, k in np.asarray(cp.saddles).reshape(-1, 2)}
     for sweep, extrema in ((order, mins), (order[::-1], maxs)):
-        for ext, saddle, pers in _merge_pairs(sweep, f, A.indptr, A.indices):
-            if pers < thr and ext in extrema and sad.get(saddle, 0) > 0:
+        for ext, saddle in merge_pairs(sweep, A.indptr, A.indices)[0]:
+            if abs(float(f[saddle] - f[ext])) < thr and ext in extrema and sad.get(saddle, 0) > 0:
                 extrema.discard(ext)
                 sad[saddle] -= 1
     saddles = np.array([[i, k] for i, k in sorted(sad.items()) if k > 0], dtype=np.int64).reshape(-1, 2)

@@ -6,9 +6,10 @@ meshes, point clouds, voxel grids and graphs.
 
 The stages, each importing only from those before it: ``laplacian`` (domains to (L, B),
 the cache, spectral bounds) -> ``filters`` -> ``linalg`` (factorizations, pseudo-solves,
-eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``diagonal`` (kernel diagonals) ->
+eigenpairs) -> ``approx`` (φ(L̃)f by method) -> ``families`` (families of filters sharing
+poles: diagonals and columns at many scales) -> ``diagonal`` (kernel diagonals) ->
 ``kernels``, ``distances``, ``descriptors``, ``embedding`` -> ``applications`` ->
-``quantity`` -> ``viz`` -> ``cli``.
+``quantity`` -> ``collection`` -> ``viz`` -> ``cli``.
 """
 from . import accuracy, filters, linalg
 from ._validate import memory_budget, set_memory_budget

@@ -6,8 +6,8 @@ import numpy as np
 from .accuracy import info as bound_info, weakest
 from ._validate import as_array, as_flag, as_int, as_positive, as_real_in, describe
 from .diagonal import kernel_diagonal
-from .diagonal.multiscale import family_diagonals, heat_diagonals
 from .distances import root_error
+from .families import family_diagonals, heat_diagonals
 from .filters import Filter, check_filter, heat
 from .laplacian import as_laplacian, lambda_max, lambda_max_kind, shape_time
 from .linalg import cached_eigs, dense_eigs, eigenvalue_bracket, lambda_min_positive
@@ -208,7 +208,7 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
 
     Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices or for 8 times
     or more, share one set of poles
-    (:func:`spectral_igl.diagonal.multiscale.heat_diagonals`): about as many factorizations
+    (:func:`spectral_igl.families.heat_diagonals`): about as many factorizations
     as one time, each time with its own certified bound (``kernel_diagonal`` options other
     than ``tol`` select the one-time-at-a-time path).
 

@@ -21,7 +21,7 @@ from .accuracy import AccuracyWarning, relative_error, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_tol, check_dense_size
 from .approx import spectral_operator
 from .approx.uniformization import metzler_heat, products_needed
-from .diagonal.multiscale import heat_columns
+from .families import heat_columns
 from .filters import check_filter, heat
 from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, shape_time
 
@@ -353,7 +353,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
               \|K_t(:,i) - \tilde K_t(:,i)\|_B \le \varepsilon_t \|B^{-1}e_i\|_B
 
     One sparse factorization per common pole of the whole family of times
-    (:func:`spectral_igl.diagonal.multiscale.heat_columns`), each solved with every source
+    (:func:`spectral_igl.families.heat_columns`), each solved with every source
     as one block right-hand side; adding a time costs a weighted sum.
 
     Parameters

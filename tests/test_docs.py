@@ -15,6 +15,9 @@ DOCS = ROOT / "docs"
 for _mod in ("sphinx", "numpydoc", "myst_parser"):
     pytest.importorskip(_mod)
 
+sys.path.insert(0, str(DOCS / "_ext"))
+from readme_tools import import_object  # noqa: E402  (the docs' own importer of dotted names)
+
 
 def _api_entries():
     """Names listed in the autosummary tables of docs/api.rst, as importable dotted names."""
@@ -28,23 +31,10 @@ def _api_entries():
     return names
 
 
-def _import(name):
-    parts = name.split(".")
-    for i in range(len(parts), 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:i]))
-        except ImportError:
-            continue
-        for attr in parts[i:]:
-            obj = getattr(obj, attr)
-        return obj
-    raise ImportError(name)
-
-
 def test_every_public_name_is_in_the_api_reference():
     import spectral_igl
 
-    documented = {id(_import(n)) for n in _api_entries()}
+    documented = {id(import_object(n)) for n in _api_entries()}
     public = {}
     for modname in ("spectral_igl", "spectral_igl.filters", "spectral_igl.io", "spectral_igl.progress",
                     "spectral_igl.applications", "spectral_igl.laplacian"):

@@ -4,14 +4,15 @@ import pytest
 import scipy.sparse as sp
 from _spectral_truth import torus
 
-from spectral_igl.applications.geodesics import HeatGeodesics, _triangle_gradients
+from spectral_igl.applications.geodesics import HeatGeodesics
 from spectral_igl.laplacian.intrinsic import intrinsic_delaunay
+from spectral_igl.laplacian.intrinsic_fem import triangle_gradients
 
 igl = pytest.importorskip("igl")
 
 
 def _stiffness(l, F, n):
-    G, A = _triangle_gradients(l, F, n)
+    G, A = triangle_gradients(l, F, n)
     return (G.T @ sp.diags(np.r_[A, A]) @ G).tocsr()
 
 

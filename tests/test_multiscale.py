@@ -4,7 +4,7 @@ import pytest
 
 import spectral_igl as sig
 from data_generators import icosphere
-from spectral_igl.diagonal.multiscale import family_diagonals, heat_columns, heat_diagonals, heat_targets
+from spectral_igl.families import family_diagonals, heat_columns, heat_diagonals, heat_targets
 from spectral_igl.filters import heat
 from spectral_igl.laplacian.cache import BUDGET_FRACTION, Cache, available_memory
 

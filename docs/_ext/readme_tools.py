@@ -55,7 +55,7 @@ class Gallery(SphinxDirective):
 
 
 # ---- cross-references ----------------------------------------------------------------------
-def _import(name: str):
+def import_object(name: str):
     """The Python object called ``name`` (dotted), or raise ImportError/AttributeError."""
     import importlib
 
@@ -102,12 +102,12 @@ def resolve_short_names(app, env, node, contnode):
     for prefix in context:
         full = f"{prefix}.{target}" if prefix else target
         try:
-            obj = _import(full)
+            obj = import_object(full)
         except (ImportError, AttributeError):
             continue
         for name, entry in domain.objects.items():    # documented under another name?
             try:
-                same = not entry.aliased and _import(name) is obj
+                same = not entry.aliased and import_object(name) is obj
             except (ImportError, AttributeError):
                 same = False
             if same:

@@ -10,7 +10,7 @@ from ..filters import heat
 from ..laplacian import as_laplacian
 from ..linalg import eigs
 
-__all__ = ["diffusion_basis", "feature_points", "graph_extrema"]
+__all__ = ["diffusion_basis", "feature_points", "graph_extrema", "merge_pairs"]
 
 
 def diffusion_basis(lap, t, centers, method: str = "auto", tol: float = 1e-8):
@@ -54,22 +54,24 @@ def _rank(f):
     return rank
 
 
-def _maxima_persistence(A, f):
-    """Persistence of every local maximum of ``f`` in the superlevel-set filtration of graph A.
+def merge_pairs(order, indptr, indices):
+    """0-dimensional persistence of the sweep that adds the vertices in ``order``.
 
-    Vertices enter in decreasing rank; a vertex without an earlier neighbour starts a
-    component (a local maximum). When components meet, the one with the lower maximum
-    dies there: its persistence is its maximum minus the current value (elder rule).
-    The highest maximum of each connected component never dies (``inf``).
+    A vertex without an earlier neighbour (in the CSR graph ``indptr, indices``; self-loops
+    ignored) starts a component. When components meet at a vertex, every one but the
+    oldest (its first vertex earliest in ``order``: the elder rule) dies there.
+
+    Returns
+    -------
+    pairs : list of (int, int)
+        ``(first vertex of the component that died, vertex where it died)``.
+    survivors : list of int
+        The first vertex of each component left at the end (one per connected component).
     """
-    n = f.size
-    rank = _rank(f)
-    order = np.argsort(-rank)
-    indptr, indices = A.indptr, A.indices
-    parent = np.arange(n)
-    top = np.arange(n)  # highest vertex of the component rooted here
-    seen = np.zeros(n, dtype=bool)
-    pers = {}
+    n = len(order)
+    parent = -np.ones(n, dtype=np.int64)     # -1: not yet added; a root is its own first vertex
+    pos = np.empty(n, dtype=np.int64)
+    pos[order] = np.arange(n)
 
     def find(x):
         root = x
@@ -79,18 +81,30 @@ def _maxima_persistence(A, f):
             parent[x], x = root, parent[x]
         return root
 
+    pairs = []
     for v in order:
-        seen[v] = True
-        roots = {find(u) for u in indices[indptr[v]:indptr[v + 1]] if seen[u] and u != v}
+        roots = {find(u) for u in indices[indptr[v]:indptr[v + 1]] if parent[u] >= 0}
         if not roots:
+            parent[v] = v
             continue
-        keep = max(roots, key=lambda r: rank[top[r]])
-        for r in roots - {keep}:
-            pers[int(top[r])] = float(f[top[r]] - f[v])
+        keep = min(roots, key=lambda r: pos[r])
+        for r in sorted(roots - {keep}, key=lambda r: pos[r]):
+            pairs.append((int(r), int(v)))
             parent[r] = keep
         parent[v] = keep
-    for r in np.unique([find(x) for x in range(n)]):
-        pers[int(top[r])] = np.inf
+    return pairs, [int(r) for r in np.unique([find(x) for x in range(n)])]
+
+
+def _maxima_persistence(A, f):
+    """Persistence of every local maximum of ``f`` in the superlevel-set filtration of graph A.
+
+    Vertices enter in decreasing rank (:func:`merge_pairs`); a component dying at ``v``
+    has persistence its maximum minus ``f[v]``. The highest maximum of each connected
+    component never dies (``inf``).
+    """
+    pairs, survivors = merge_pairs(np.argsort(-_rank(f)), A.indptr, A.indices)
+    pers = {top: float(f[top] - f[v]) for top, v in pairs}
+    pers.update((top, np.inf) for top in survivors)
     return pers
 
 

@@ -21,6 +21,7 @@ import scipy.sparse as sp
 
 from .._validate import as_int, as_positive, describe
 from ..laplacian import Laplacian
+from ..laplacian.intrinsic_fem import intrinsic_operators
 from ..linalg import factorize
 
 __all__ = ["PositiveHeat", "metzler_stiffness", "log_apply", "MAX_STEPS"]
@@ -95,8 +96,6 @@ class PositiveHeat:
         self.steps = int(steps)
         self.n = lap.n
         if lap.domain == "triangle" and "V" in lap.data and "F" in lap.data:
-            from .geodesics import intrinsic_operators
-
             V = np.asarray(lap.data["V"], dtype=float)
             V = V if V.shape[1] == 3 else np.c_[V, np.zeros(len(V))]
             _, _, L, M, _ = intrinsic_operators(V, np.asarray(lap.data["F"]))

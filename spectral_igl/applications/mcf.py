@@ -7,7 +7,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._validate import as_flag, as_positive, check_dense_size, describe
-from ..laplacian.mesh import clean_mesh, cotan_stiffness, element_measures, full_mass
+from ..laplacian.elements import cotan_stiffness, element_measures, full_mass
+from ..laplacian.mesh import clean_mesh
 
 __all__ = ["mean_curvature_flow"]
 

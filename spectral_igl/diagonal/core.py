@@ -59,10 +59,10 @@ from ..approx import METHODS as ENGINE_METHODS
 from ..approx.common import gamma, mass_sum_rounding
 from ..filters import check_filter
 from ..laplacian import as_laplacian, entry_error, lambda_max, lambda_max_kind
-from ..linalg import lambda_min_positive, lambda_min_positive_kind
+from ..linalg import inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind
 from ..progress import progress_bar
 from .probing import probing_diagonal
-from .selinv import NoSelinv, inverse_mass_diagonal, selinv_kernel, selinv_supported
+from .selinv import NoSelinv, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal, low_rank, phi_values
 
 __all__ = ["kernel_diagonal", "check_diagonal_options", "column_entry_error", "METHODS", "EXACT_MAX"]

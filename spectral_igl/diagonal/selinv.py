@@ -10,6 +10,7 @@ from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, round
 from ..laplacian import lambda_max, lambda_max_kind
 from ..linalg import (
     grounded_factor,
+    inverse_mass_diagonal,
     lambda_min_positive,
     lambda_min_positive_kind,
     ldlt,
@@ -29,7 +30,7 @@ ROUNDING_C = 64.0
 CIRCLE_NODES = 24
 CIRCLE_RADIUS = 1.0 / 3.0
 
-__all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported", "inverse_mass_diagonal"]
+__all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported"]
 
 
 class NoSelinv(Exception):
@@ -41,14 +42,6 @@ def selinv_supported(lap, filt, delta: str = "mass") -> bool:
     if not ldlt.available() or (delta == "seed" and not lap.lumped):
         return False
     return not filt.is_complex
-
-
-def inverse_mass_diagonal(lap) -> np.ndarray:
-    """diag(B^-1): 1/m for a lumped mass, else by selected inversion (cached)."""
-    if lap.lumped:
-        return 1.0 / lap.mass
-    return lap.cache.fetch("diagonal", "inverse_mass",
-                           lambda: shifted_factor(lap, 0.0, 1.0, backend="ldlt").inverse_diagonal())
 
 
 class SelinvKernel:

@@ -8,7 +8,8 @@ import scipy.sparse as sp
 
 from .._validate import as_cells, as_mesh_arrays, as_nonnegative, as_points
 from ._operator import Laplacian, make_laplacian
-from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, square, star_adjacency
+from .elements import star_adjacency
+from .mesh import MASSES, clean_mesh_with_measures, mass_matrix, square
 
 __all__ = ["anisotropic_laplacian", "face_curvature"]
 

@@ -8,6 +8,7 @@ import scipy.sparse as sp
 
 from .._validate import as_points, describe
 from ._operator import Laplacian, drop_negative_weights, make_laplacian
+from .elements import cotan_stiffness, full_mass
 
 __all__ = ["polygon_laplacian", "as_polygons", "virtual_vertices"]
 
@@ -153,8 +154,6 @@ def polygon_laplacian(V, faces, mass: str = "full", positive: bool = False) -> L
     >>> round(lap.area(), 12), bool(np.allclose(lap.L @ np.ones(4), 0))
     (1.0, True)
     """
-    from .mesh import cotan_stiffness, full_mass
-
     V = as_points(V, "V", dims=(3,))
     n = V.shape[0]
     if mass not in _MASSES:

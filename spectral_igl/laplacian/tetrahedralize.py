@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_cells, as_flag, as_mesh_arrays, as_points, as_positive, as_real_in
-from .mesh import element_measures
+from .elements import element_measures
 
 __all__ = ["tetrahedralize"]
 

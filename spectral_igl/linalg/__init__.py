@@ -18,6 +18,7 @@ from .solves import (
                      clear_cache,
                      grounded_factor,
                      grounded_vertices,
+                     inverse_mass_diagonal,
                      ldlt_factor,
                      ldlt_pattern,
                      mass_solve,
@@ -26,6 +27,6 @@ from .solves import (
 )
 
 __all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
-           "shifted_factor", "mass_solve", "pseudo_solve", "grounded_vertices", "grounded_factor",
+           "shifted_factor", "mass_solve", "inverse_mass_diagonal", "pseudo_solve", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "dense_eigs",
            "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind", "negative_inertia", "eigenvalue_bracket"]

@@ -28,7 +28,7 @@ from .factor import check_backend, factorize
 
 log = logging.getLogger(__name__)
 
-__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "grounded_vertices", "grounded_factor",
+__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "inverse_mass_diagonal", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache"]
 
 
@@ -150,6 +150,14 @@ def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarr
     else:
         u = shifted_factor(lap, 0.0, 1.0, backend=backend).solve(g)
     return check_finite_result(u, "B^-1 g", "g is too large for the masses (rescale it)")
+
+
+def inverse_mass_diagonal(lap) -> np.ndarray:
+    """diag(B^-1): 1/m for a lumped mass, else by selected inversion (cached)."""
+    if lap.lumped:
+        return 1.0 / lap.mass
+    return lap.cache.fetch("diagonal", "inverse_mass",
+                           lambda: shifted_factor(lap, 0.0, 1.0, backend="ldlt").inverse_diagonal())
 
 
 def grounded_vertices(lap: Laplacian) -> np.ndarray:
