@@ -26,7 +26,7 @@ def uv_sphere(n_lat: int = 32, n_lon: int = 64, radius: float = 1.0):
     """Latitude-longitude sphere: ``n_lat - 1`` rings of ``n_lon`` vertices plus two poles.
 
     Strongly anisotropic triangles near the poles (a harder test than the icosphere).
-    Eigenvalues: :func:`data_generators.sphere_eigenvalues`. Returns ``(V, F)``, outward.
+    Eigenvalues: :func:`spectral_igl.data_generators.sphere_eigenvalues`. Returns ``(V, F)``, outward.
     """
     n_lat, n_lon = count(n_lat, "n_lat", 2, 10 ** 5), count(n_lon, "n_lon", 3, 10 ** 5)
     radius = real(radius, "radius", positive=True)
@@ -112,7 +112,7 @@ def box_voxels(shape=(16, 12, 8), size=(1.0, 0.75, 0.5)):
 
     Returns ``(mask, spacing)`` with ``spacing = size / shape`` (per axis).
     Eigenvalues: :func:`box_voxel_eigenvalues` (exact discrete) and
-    :func:`data_generators.box_eigenvalues` (continuous limit).
+    :func:`spectral_igl.data_generators.box_eigenvalues` (continuous limit).
     """
     shape = triple(shape, "shape", "count")
     size = triple(size, "size", "length")
