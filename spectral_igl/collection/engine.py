@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._extras import require
 from .._validate import describe
 from .._version import __version__
 from .jobs import Job
@@ -438,6 +439,7 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
         summary.seconds = time.perf_counter() - t_start
         return summary
 
+    require("distributed", "cluster", "spectral_igl.collection")
     from distributed import progress as dask_progress
     from distributed import wait
 
