@@ -38,7 +38,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "api/generated/*.md"]
+exclude_patterns = ["_build", "api/generated/*.md", "gallery/*.md"]   # gallery/captions.md: data
 templates_path = ["_templates"]
 root_doc = "index"
 
