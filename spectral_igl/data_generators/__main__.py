@@ -60,7 +60,7 @@ def main(argv=None) -> int:
         return 0
     if a.shape == "box_tets":
         V, T = box_tets((a.n, a.n, a.n), (1.0, 1.0, 1.0))
-        from spectral_igl.io import write_mesh
+        from ..io import write_mesh
 
         write_mesh(out, V, T)
         print(f"wrote {out}: {len(V)} vertices, {len(T)} tetrahedra")
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
         V, F = make_holes(V, F, a.holes, seed=a.seed)
     if a.shape == "volume":
         V, T = volume_from_surface(V, F, edge_length_fac=a.edge_length_fac)
-        from spectral_igl.io import write_mesh
+        from ..io import write_mesh
 
         write_mesh(out, V, T)
         print(f"wrote {out}: {len(V)} vertices, {len(T)} tetrahedra")
@@ -91,7 +91,7 @@ def main(argv=None) -> int:
         np.save(out, V)
         print(f"wrote {out}: {len(V)} vertices (faces not saved in .npy)")
         return 0
-    from spectral_igl.io import write_mesh
+    from ..io import write_mesh
 
     write_mesh(out, V, F)
     print(f"wrote {out}: {len(V)} vertices, {len(F)} faces")
