@@ -22,9 +22,13 @@ from .applications import (
                            feature_points,
                            geodesic_distance,
                            harmonic,
+                           heat_trace,
                            mean_curvature_flow,
                            optimal_time,
                            schrodinger,
+                           shape_distance,
+                           shape_distance_matrix,
+                           shape_dna,
                            smooth,
                            smooth_constrained,
                            optimal_shape_time,
@@ -37,8 +41,11 @@ from .descriptors import (
                            auto_diffusion_function,
                            eccentricity,
                            hks,
+                           hks_times,
+                           spectral_band,
                            spectral_descriptor,
                            wks,
+                           wks_energies,
 )
 from .diagonal import distance_colouring, kernel_diagonal
 from .distances import (
@@ -69,7 +76,9 @@ from .laplacian import (
                            make_laplacian,
                            point_cloud_laplacian,
                            polygon_laplacian,
+                           shape_time,
                            tetrahedralize,
+                           time_scale,
                            voxel_laplacian,
 )
 from .linalg import dense_eigs, eigs, lambda_min_positive
@@ -79,6 +88,7 @@ __all__ = [
     # domains
     "Laplacian", "make_laplacian", "laplacian", "point_cloud_laplacian", "anisotropic_laplacian",
     "voxel_laplacian", "graph_laplacian", "tetrahedralize", "polygon_laplacian", "lambda_max",
+    "shape_time", "time_scale",
     "lambda_min_positive",
     "eigs", "dense_eigs",
     # engine
@@ -90,12 +100,14 @@ __all__ = [
     "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",
     "commute_time_distance", "biharmonic_distance", "polyharmonic_distance", "wave_distance",
     "mexican_hat_distance", "spectral_descriptor", "hks", "wks", "auto_diffusion_function",
+    "hks_times", "wks_energies", "spectral_band",
     "eccentricity", "spectral_embedding",
     # applications
     "CriticalPoints", "critical_points", "harmonic", "smooth", "smooth_constrained",
     "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
-    "schrodinger", "mean_curvature_flow",
+    "schrodinger", "mean_curvature_flow", "shape_dna", "heat_trace", "shape_distance",
+    "shape_distance_matrix",
 ]
 
 # --- collection ---

@@ -44,14 +44,22 @@ DELTAS = ("mass", "seed")
 
 
 def describe(x) -> str:
-    """A short description of ``x`` for error messages."""
+    """A short, one-line description of ``x`` for error messages.
+
+    Numbers, strings and other builtins are shown with their value; arrays by shape and
+    dtype; any other object by its type only (a foreign object's repr can span many lines).
+    """
     if isinstance(x, np.ndarray):
         return f"array of shape {x.shape} and dtype {x.dtype}"
     if hasattr(x, "shape") and hasattr(x, "dtype"):
         return f"{type(x).__name__} of shape {x.shape} and dtype {x.dtype}"
-    if isinstance(x, (list, tuple)):
+    if isinstance(x, (list, tuple, dict, set, frozenset)):
         return f"{type(x).__name__} of length {len(x)}"
-    return f"{type(x).__name__} {x!r}"[:200]
+    if x is None or isinstance(x, (bool, int, float, complex, str, bytes, np.generic)):
+        text = f"{type(x).__name__} {x!r}"
+        return text if len(text) <= 120 else text[:117] + "..."
+    kind = type(x)
+    return f"a {kind.__module__.split('.')[0]}.{kind.__qualname__} object"
 
 
 def as_array(x, name: str) -> np.ndarray:

@@ -28,12 +28,13 @@ from ._version import __version__
 from ._validate import as_signal
 from .applications import diffusion_smooth, geodesic_distance, optimal_shape_time, optimal_time
 from .approx import METHODS
-from .descriptors import hks
+from .descriptors import hks, hks_times
 from .distances import MAX_ORDER
 from .diagonal import METHODS as DIAGONAL_METHODS
 from .filters import FILTERS
 from .io import read_mesh, write_mesh
 from .laplacian import laplacian
+from .laplacian.units import TIME_UNITS, shape_time, time_label
 from .progress import enabled as progress_enabled
 from .progress import progress_bar
 from .quantity import QUANTITIES, color_meaning, evaluate
@@ -161,12 +162,38 @@ def _picture_args(p):
                         "at 0 for signed ones")
 
 
-def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area)"):
+def _time_unit_arg(p, what="-t"):
+    p.add_argument("--time-unit", default=None, choices=TIME_UNITS,
+                   help=f"unit of {what}: absolute (as given; the default), shape (x the area of a "
+                        "surface, x volume^(2/3) of a solid: the same meaning on a mesh of any size "
+                        "or unit), area, volume, h2 (x the squared mean edge length)")
+
+
+def _given_time(lap, t, unit, default=None, what="-t"):
+    """``(absolute t, label)`` of a time given on the command line (``default``: a time in the
+    shape's units used when ``-t`` is omitted, or None to leave the choice to the job)."""
+    if t is None:
+        if unit is not None:
+            raise CLIError(f"--time-unit {unit} applies to {what}, which was not given", EXIT_USAGE)
+        if default is None:
+            return None, "t=default"
+        t, unit = default, "shape"
+    unit = unit or "absolute"
+    try:
+        value = shape_time(lap, t, unit)
+    except ValueError as err:
+        raise CLIError(str(err), EXIT_USAGE) from err
+    return value, time_label(t, value, unit) if np.ndim(value) == 0 else f"{unit} units"
+
+
+def _engine_args(p, filter_default, t_help="time/scale t of the filter (default: 1e-2 x area of "
+                                              "a surface, x volume^(2/3) of a solid)"):
     p.add_argument("-s", "--source", type=_nonnegative_int, default=0,
                    help="source vertex index (default 0)")
     p.add_argument("-f", "--filter", default=filter_default, choices=_FILTERS, metavar="FILTER",
                    help=f"spectral filter: {', '.join(_FILTERS)} (default {filter_default})")
     p.add_argument("-t", "--time", type=_positive, default=None, help=t_help)
+    _time_unit_arg(p)
     p.add_argument("--order", type=_order, default=3,
                    help=f"order k of the polyharmonic filter, 1 to {MAX_ORDER} (default 3)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
@@ -215,7 +242,16 @@ def build_parser():
                                    "Output (n, number of times); the picture shows the middle time.")
     _input_args(p)
     p.add_argument("--times", type=_positive, nargs="+", default=None,
-                   help="times t (default: 5 log-spaced values from 1e-3 to 1e-1 x area)")
+                   help="times t (default: --count times from the shape's spectrum, spanning its "
+                        "first 200 eigenvalues as Sun et al. 2009: the same grid relative to any "
+                        "shape)")
+    _time_unit_arg(p, "--times")
+    p.add_argument("--count", type=_positive_int, default=5,
+                   help="number of times of the default grid (default 5)")
+    p.add_argument("--normalize", action=argparse.BooleanOptionalAction, default=True,
+                   help="multiply by the area (volume) of the vertex's component: dimensionless, "
+                        "comparable across shapes of any size (default on; --no-normalize gives "
+                        "K_t(i, i) as is)")
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--diagonal", default="auto", choices=DIAGONAL_METHODS,
@@ -239,6 +275,7 @@ def build_parser():
                    help="diffusion time (default: for --signal, the minimum of the estimated "
                         "risk, optimal_time; for the shape itself, the same risk rule with the "
                         "noise measured along the normals, optimal_shape_time)")
+    _time_unit_arg(p)
     p.add_argument("--method", default="auto", choices=_METHODS, metavar="METHOD",
                    help=f"approximation method: {', '.join(_METHODS)} (default auto)")
     p.add_argument("--tol", type=_tolerance, default=1e-8)
@@ -251,6 +288,7 @@ def build_parser():
                    help="heat method (Crane et al.) or Varadhan's formula (default heat)")
     p.add_argument("-t", "--time", type=_positive, default=None,
                    help="diffusion time (default: squared mean edge length)")
+    _time_unit_arg(p)
 
     p = sub.add_parser("view", help="interactive viewer: click a vertex to see level sets",
                        description="Interactive viewer: press p over the surface to pick a vertex; "
@@ -346,15 +384,6 @@ def _laplacian(V, C, args):
         raise CLIError(f"cannot build the Laplacian: {err}", EXIT_INPUT) from err
 
 
-def _default_time(lap):
-    return 1e-2 * float(lap.area()) if lap.domain == "triangle" else 1e-2 * _volume_scale(lap)
-
-
-def _volume_scale(lap):
-    V = lap.data["V"]
-    return float(np.sum((V.max(0) - V.min(0)) ** 2))
-
-
 def _column_names(values, names=None):
     """Names of the columns of ``values`` (CSV header, fields of a mesh file)."""
     k = 1 if values.ndim == 1 else values.shape[1]
@@ -430,9 +459,7 @@ def _job_kernel_distance(args):
     lap = _laplacian(V, C, args)
     prog.update()
     prog.set_postfix_str(args.job)
-    t = args.time
-    if FILTERS[args.filter][1] and t is None:
-        t = _default_time(lap)
+    t, _ = _given_time(lap, args.time, args.time_unit, 1e-2 if FILTERS[args.filter][1] else None)
     ev = evaluate(lap, args.job, args.source, args.filter, t, method=args.method, tol=args.tol,
                   order=args.order, diagonal=args.diagonal)
     prog.update()
@@ -453,15 +480,17 @@ def _job_hks(args):
     _check_outputs(args.out, _OUTPUTS)
     V, C, name = _load_shape(args)
     lap = _laplacian(V, C, args)
-    times = args.times
+    times, _ = _given_time(lap, args.times, args.time_unit, what="--times")
     if times is None:
-        times = list(np.logspace(-3, -1, 5) * (_default_time(lap) / 1e-2))
+        times = hks_times(lap, args.count)
+    times = [float(t) for t in times]
     start = time.perf_counter()     # one bar step per time (progress=None: the CLI's setting)
     H, info = hks(lap, np.asarray(times, dtype=float), method=args.diagonal, engine_method=args.method,
-                  tol=args.tol, return_info=True)
+                  tol=args.tol, return_info=True, normalize=args.normalize)
     H = np.asarray(H, dtype=float).reshape(lap.n, len(times))
     seconds = time.perf_counter() - start
-    _write(args.out, H, V, C, args, kind="sequential", title=f"HKS t={times[len(times) // 2]:.3g} ({name})",
+    title = ("HKS x area" if args.normalize else "HKS") + f" t={times[len(times) // 2]:.3g} ({name})"
+    _write(args.out, H, V, C, args, kind="sequential", title=title,
            names=[f"t={t:.4g}" for t in times])
     why = info.get("note", f"method {info['method']}")
     _say(args, f"hks at {len(times)} times on {name} ({lap.n} vertices); "
@@ -507,7 +536,7 @@ def _job_smooth(args):
     if geometry:  # smoothing the shape itself: the operator is that of the (noisy) shape
         V = f.copy()
     lap = _laplacian(V, C, args)
-    t = args.time
+    t, _ = _given_time(lap, args.time, args.time_unit)
     if t is None and geometry and C.shape[1] == 3:
         # the risk rule with the shape's normal noise (the noisy operator hides it)
         t = optimal_shape_time(lap)[0]
@@ -550,7 +579,8 @@ def _job_geodesic(args):
                        EXIT_USAGE)
     lap = _laplacian(V, C, args)
     start = time.perf_counter()
-    d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=args.time))
+    t, _ = _given_time(lap, args.time, args.time_unit)
+    d = np.asarray(geodesic_distance(lap, args.source, method=args.method, t=t))
     seconds = time.perf_counter() - start
     _write(args.out, d, V, C, args, sources=[args.source], kind="distance",
            title=f"geodesic distance ({args.method}) ({name})", names=["geodesic_distance"])
@@ -578,7 +608,7 @@ def _job_view(args):
         raise CLIError(f"--source {args.source} is out of range: the mesh has {len(V)} vertices",
                        EXIT_USAGE)
     lap = _laplacian(V, C, args)
-    t = args.time if args.time is not None else _default_time(lap)
+    t, _ = _given_time(lap, args.time, args.time_unit, 1e-2)
     off = args.screenshot is not None
     viewer = Viewer(lap, quantity=args.quantity, filter=args.filter, t=t, method=args.method,
                     source=args.source, tol=args.tol, off_screen=True if off else None,
@@ -664,13 +694,21 @@ def _batch_arguments(sub):
                    help="hks (--times), wks (--energies), kernel diagonal (--filter, -t), "
                         "one-to-all distance (--sources, --filter, -t), eigenvalues (-k)")
     p.add_argument("-o", "--out", required=True, metavar="STORE", help="Zarr store (a directory)")
-    p.add_argument("--times", type=_positive, nargs="+", help="hks: times t")
-    p.add_argument("--energies", type=float, nargs="+", help="wks: log-energies")
+    p.add_argument("--times", type=_positive, nargs="+",
+                   help="hks: times t (default: --count times from each shape's own spectrum)")
+    p.add_argument("--count", type=_positive_int, default=100,
+                   help="hks: number of times of the default grid (default 100)")
+    p.add_argument("--normalize", action=argparse.BooleanOptionalAction, default=True,
+                   help="hks: multiply by the area (volume) of each vertex's component, so that "
+                        "shapes of different sizes compare (default on)")
+    p.add_argument("--energies", type=float, nargs="+",
+                   help="wks: log-energies (default: 100 from each shape's own spectrum)")
     p.add_argument("--sigma", type=_positive, default=None, help="wks: band width")
     p.add_argument("-f", "--filter", default=None, metavar="FILTER",
                    choices=_FILTERS, help=f"diagonal, distance: {', '.join(_FILTERS)} "
                                           "(default heat for diagonal, biharmonic for distance)")
     p.add_argument("-t", "--time", type=_positive, default=None, help="time t of the filter")
+    _time_unit_arg(p, "-t and --times")
     p.add_argument("--order", type=_positive_int, default=3, help="polyharmonic order (default 3)")
     p.add_argument("-s", "--sources", type=_nonnegative_int, nargs="+", help="distance: source vertices")
     p.add_argument("-k", type=_positive_int, default=None,
@@ -696,14 +734,16 @@ def _batch_job(args):
     from .collection import Job
 
     kind = args.batch_job
+    unit = args.time_unit or "absolute"
     if kind == "hks":
-        if not args.times:
-            raise CLIError("--job hks needs --times", EXIT_USAGE)
-        return Job.hks(args.times, method=args.method, tol=args.tol)
+        if not args.times and args.time_unit:
+            raise CLIError(f"--time-unit {unit} applies to --times, which were not given", EXIT_USAGE)
+        return Job.hks(args.times or None, method=args.method, tol=args.tol, time_unit=unit,
+                       normalize=args.normalize, count=args.count)
+    if kind in ("wks", "eigenvalues") and args.time_unit:
+        raise CLIError(f"--time-unit applies to times; --job {kind} has none", EXIT_USAGE)
     if kind == "wks":
-        if not args.energies:
-            raise CLIError("--job wks needs --energies", EXIT_USAGE)
-        return Job.wks(args.energies, sigma=args.sigma, k=args.k or 100,
+        return Job.wks(args.energies or None, sigma=args.sigma, k=args.k or 100,
                        method="eigen" if args.method == "auto" else args.method)
     if kind == "eigenvalues":
         return Job.eigenvalues(args.k or 20)
@@ -714,10 +754,11 @@ def _batch_job(args):
     if timed and t is None:
         raise CLIError(f"filter {filt} needs a time: give -t", EXIT_USAGE)
     if kind == "diagonal":
-        return Job.kernel_diagonal(filt, t=t, order=order, method=args.method, tol=args.tol)
+        return Job.kernel_diagonal(filt, t=t, order=order, method=args.method, tol=args.tol, time_unit=unit)
     if not args.sources:
         raise CLIError("--job distance needs --sources", EXIT_USAGE)
-    return Job.distances(args.sources, filt, t=t, order=order, method=args.method, tol=args.tol)
+    return Job.distances(args.sources, filt, t=t, order=order, method=args.method, tol=args.tol,
+                         time_unit=unit)
 
 
 def _job_batch(args):

@@ -9,15 +9,106 @@ from .diagonal import kernel_diagonal
 from .diagonal.multiscale import family_diagonals, heat_diagonals
 from .distances import root_error
 from .filters import Filter, check_filter, heat
-from .laplacian import as_laplacian, lambda_max_kind
-from .linalg import cached_eigs, dense_eigs
+from .laplacian import as_laplacian, lambda_max, lambda_max_kind, shape_time
+from .linalg import cached_eigs, dense_eigs, eigenvalue_bracket, lambda_min_positive
+from .linalg.eigen import lambda_min_positive_kind
 from .progress import progress_bar
 
-__all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity"]
+__all__ = ["spectral_descriptor", "hks", "wks", "auto_diffusion_function", "eccentricity",
+           "spectral_band", "hks_times", "wks_energies"]
 
 
 #: most times or energies per call (each is one kernel diagonal)
 MAX_SCALES = 1000
+
+#: descriptor grids span the first ``BAND`` eigenvalues (the number of eigenpairs common practice
+#: computes for descriptors, e.g. pyFM's default) with ``GRID_SIZE`` scales
+BAND, GRID_SIZE = 200, 100
+
+#: the HKS grid runs from the time that damps lambda_hi to 1e-4, e^{-t lambda} = 1e-4, to the one
+#: that damps lambda_lo so (Sun et al. 2009)
+_DAMP = 4.0 * np.log(10.0)
+
+
+def spectral_band(lap, k: int = BAND):
+    r"""The ends :math:`(\lambda_{lo}, \lambda_{hi})` of the band of the first ``k`` eigenvalues
+    that descriptor grids span, spectrum-free, and whether they are proved.
+
+    :math:`\lambda_{lo}` is a proved lower bound of the smallest positive eigenvalue
+    :math:`\lambda_{c+1}` (:func:`spectral_igl.lambda_min_positive`, within 0.1% of it);
+    :math:`\lambda_{hi}` is :math:`\lambda_k` (counted with the zeros of ker L, as an
+    eigen-solver returns them), the geometric middle of a proved bracket 5% wide
+    (:func:`spectral_igl.linalg.eigenvalue_bracket`: a few inertia counts, no eigenvector);
+    for ``k >= n`` the proved :func:`spectral_igl.lambda_max`.
+
+    Returns
+    -------
+    lam_lo, lam_hi : float
+    kind : str
+        ``"proof"`` or ``"estimate"`` (of the brackets behind the two ends).
+    """
+    lap = as_laplacian(lap)
+    k = as_int(k, "k", lo=1)
+    c = lap.n_components
+    if c >= lap.n:
+        raise ValueError("the shape has no non-zero eigenvalue (every vertex is its own component)")
+    lam_lo, kind_lo = lambda_min_positive(lap), lambda_min_positive_kind(lap)
+    if k >= lap.n:
+        return lam_lo, lambda_max(lap), weakest(kind_lo, lambda_max_kind(lap))
+    lo, hi, kind = eigenvalue_bracket(lap, max(k, c + 2) if c + 2 <= lap.n else lap.n)
+    return lam_lo, max(float(np.sqrt(lo * hi)), lam_lo), weakest(kind_lo, kind)
+
+
+def hks_times(lap, n: int = GRID_SIZE, k: int = BAND):
+    r"""HKS times from the spectrum (Sun et al. 2009): ``n`` times log-spaced over
+    :math:`[4\ln 10/\lambda_{hi},\ 4\ln 10/\lambda_{lo}]`.
+
+    The band :math:`[\lambda_{lo}, \lambda_{hi}]` of the first ``k`` eigenvalues comes from
+    :func:`spectral_band`, spectrum-free. At the first time the k-th eigenfunction's weight is
+    :math:`e^{-t\lambda_{hi}} = 10^{-4}`: finer scales are below what k eigenpairs resolve;
+    at the last, the first non-constant one's is. The same as pyFM's ``auto_HKS`` on the same
+    ``k`` eigenvalues (to the bracket's 2.5%), and covariant with scale: on a shape scaled by
+    s every time is multiplied by :math:`s^2`.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(3)
+    >>> t = sig.hks_times(sig.laplacian(V, F), n=5, k=50)
+    >>> T = sig.hks_times(sig.laplacian(10 * V, F), n=5, k=50)
+    >>> bool(abs(T[0] / t[0] - 100) < 1e-6 * 100)
+    True
+    """
+    lap = as_laplacian(lap)
+    n = as_int(n, "n", lo=1, hi=MAX_SCALES)
+    lam_lo, lam_hi, _ = spectral_band(lap, k)
+    return np.geomspace(_DAMP / lam_hi, _DAMP / lam_lo, n)
+
+
+def wks_energies(lap, n: int = GRID_SIZE, k: int = BAND):
+    r"""WKS log-energies and band width from the spectrum (Aubry et al. 2011).
+
+    With :math:`[e_{lo}, e_{hi}] = [\log\lambda_{lo}, \log\lambda_{hi}]` the band of the first
+    ``k`` eigenvalues (:func:`spectral_band`) and :math:`r = e_{hi} - e_{lo}`:
+    :math:`\sigma = 7 r / \max(n, 100)` and ``n`` energies evenly spaced over
+    :math:`[e_{lo} + 2\sigma, e_{hi} - 2\sigma]`. For ``n >= 100`` this is Aubry et al.'s
+    choice as pyFM's ``auto_WKS`` implements it; fewer energies keep the band width of 100
+    (a wider one would blur every energy into its neighbours').
+
+    Returns
+    -------
+    energies : (n,) float
+    sigma : float
+    """
+    lap = as_laplacian(lap)
+    n = as_int(n, "n", lo=1, hi=MAX_SCALES)
+    lam_lo, lam_hi, _ = spectral_band(lap, k)
+    e_lo, e_hi = np.log(lam_lo), np.log(lam_hi)
+    sigma = 7.0 * (e_hi - e_lo) / max(n, GRID_SIZE)
+    if not sigma > 0:
+        raise ValueError(f"the band of the first {k} eigenvalues is a single point; use a larger k")
+    return np.linspace(e_lo + 2 * sigma, e_hi - 2 * sigma, n), float(sigma)
 
 
 def _values(x, name):
@@ -80,7 +171,8 @@ def spectral_descriptor(lap, filt, method: str = "auto", return_info: bool = Fal
     return kernel_diagonal(lap, filt, method=method, return_info=return_info, **kwargs)
 
 
-def hks(lap, times, method: str = "auto", progress=None, return_info: bool = False, **kwargs):
+def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool = False,
+        time_unit: str = "absolute", normalize: bool = False, **kwargs):
     r"""Heat kernel signature (Sun et al. 2009) at one or several times.
 
     .. math:: HKS(i, t) = K_t(i, i) = \sum_l e^{-t\lambda_l}\, x_l(i)^2
@@ -88,8 +180,9 @@ def hks(lap, times, method: str = "auto", progress=None, return_info: bool = Fal
     Parameters
     ----------
     lap : Laplacian
-    times : float or (T,) float
-        Diffusion times.
+    times : float or (T,) float, optional
+        Diffusion times, in the units ``time_unit``. Default: :func:`hks_times` (100 times
+        spread over the band of the first 200 eigenvalues, from the spectrum, spectrum-free).
     method : str
         Diagonal method, see :func:`spectral_igl.kernel_diagonal`.
     progress : bool, optional
@@ -100,6 +193,16 @@ def hks(lap, times, method: str = "auto", progress=None, return_info: bool = Fal
         result, the kernel diagonal's bound at every vertex and time
         (:func:`spectral_igl.kernel_diagonal`), ``bound_kind`` (the weakest over the times),
         ``method``.
+    time_unit : str
+        Unit of ``times`` (:mod:`spectral_igl.laplacian.units`): ``"absolute"`` (default),
+        ``"shape"`` (x area on surfaces, x volume\ :sup:`2/3` on solids), ``"area"``,
+        ``"volume"``, ``"h2"``. ``info["times"]`` holds the absolute times used.
+    normalize : bool
+        Multiply by the measure (area or volume) of the vertex's connected component, the
+        shape's measure on a connected shape: a dimensionless HKS that tends to 1 at large t on
+        every component (an unreferenced vertex is its own component: 1 at every t) and, at
+        times in the shape's units (or on the default grid), does not change when the shape is
+        scaled, so that shapes of different sizes compare.
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
@@ -116,18 +219,34 @@ def hks(lap, times, method: str = "auto", progress=None, return_info: bool = Fal
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
-    T = _values(times, "times")
+    normalize = as_flag(normalize, "normalize")
+    if times is None:
+        if time_unit != "absolute":
+            raise ValueError(f"time_unit={time_unit!r} applies to times, which were not given (the "
+                             "default grid hks_times(lap) follows the shape's spectrum already)")
+        times = hks_times(lap)
+    T = _values(shape_time(lap, _values(times, "times"), time_unit, "times"), "times")
     Tv = T.reshape(-1)
-    for t in Tv:
-        as_positive(t, "time")
+    out, info = _hks(lap, T, Tv, method, progress, kwargs)
+    info["times"] = Tv.copy()
+    if normalize:        # the measure of each vertex's component: 1 at large t on every component
+        scale = lap.component_volume() if out.ndim == 1 else lap.component_volume()[:, None]
+        out = out * scale
+        info["abs_error"] = info["abs_error"] * scale * (1.0 + 2.0 * EPS) + EPS * np.abs(out)
+        info["normalized_by"] = "component measure"
+    return (out, info) if return_info else out
+
+
+def _hks(lap, T, Tv, method, progress, kwargs):
+    """``(values, info)`` of :func:`hks` at validated absolute times ``T``."""
     if _family(lap, method, Tv.size, kwargs):
         with progress_bar(T.size, "hks", progress, unit="time") as bar:
             md = heat_diagonals(lap, Tv, tol=kwargs.get("tol", 1e-8))
             out = md.values.copy()
             bar.update(T.size)
         info = bound_info(md.abs_bound, weakest(md.bound_kind, lambda_max_kind(lap)), "selinv",
-                             eps=md.eps.copy(), factorizations=md.n_factorizations)
-        return (out, info) if return_info else out
+                          eps=md.eps.copy(), factorizations=md.n_factorizations)
+        return out, info
     cols, infos = [], []
     with progress_bar(T.size, "hks", progress, unit="time") as bar:
         for t in Tv:
@@ -138,7 +257,7 @@ def hks(lap, times, method: str = "auto", progress=None, return_info: bool = Fal
             bar.set_postfix_str(f"t={t:.3g}")
             bar.update()
     out = cols[0] if T.ndim == 0 else np.stack(cols, axis=1)
-    return (out, _stacked(infos, T.ndim == 0)) if return_info else out
+    return out, _stacked(infos, T.ndim == 0)
 
 
 def _family(lap, method, count, kwargs) -> bool:
@@ -220,7 +339,7 @@ def _ratio_error(w, d_error, tr, tr_error):
     return (d_error + np.abs(w) * tr_error) / low * (1.0 + 4.0 * EPS) + 2.0 * EPS * np.abs(w)
 
 
-def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "eigen",
+def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: str = "eigen",
         progress=None, return_info: bool = False, **kwargs):
     r"""Wave kernel signature (Aubry et al. 2011) at log-energies ``energies``.
 
@@ -229,12 +348,13 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
 
     Parameters
     ----------
-    energies : float or (E,) float
-        Log-energies :math:`e` (Aubry et al. spread them over
-        :math:`[\log\lambda_2, \log\lambda_k]`).
+    energies : float or (E,) float, optional
+        Log-energies :math:`e`. Default: :func:`wks_energies` over the band of the first
+        ``k`` non-zero eigenvalues (100 energies, Aubry et al.'s spacing and ``sigma``), from
+        the spectrum, spectrum-free; ``info["energies"]`` and ``info["sigma"]`` hold the grid.
     sigma : float, optional
-        Band width; default :math:`7\,\delta` with :math:`\delta` the spacing of
-        ``energies`` (Aubry's choice), required for a single energy.
+        Band width; default with ``energies`` given: :math:`7\,\delta` with :math:`\delta` the
+        spacing of ``energies`` (Aubry's choice), required for a single energy.
     k : int
         Non-zero eigenpairs for ``method="eigen"`` (the definition of Aubry et al.).
     method : {"eigen", "auto", "selinv", "exact", "probing", "dense"}
@@ -269,6 +389,10 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
+    if energies is None:
+        k = as_int(k, "k", lo=1, hi=lap.n)
+        energies, grid_sigma = wks_energies(lap, GRID_SIZE, lap.n_components + k)
+        sigma = grid_sigma if sigma is None else sigma
     E = _values(energies, "energies")
     Ev = E.reshape(-1)
     if sigma is None:
@@ -334,6 +458,7 @@ def wks(lap, energies, sigma: float | None = None, k: int = 100, method: str = "
             info["note"] = "; ".join(dict.fromkeys(x for x in notes if x))
     if E.ndim == 0:
         out, info["abs_error"] = out[:, 0], info["abs_error"][:, 0]
+    info.update(energies=Ev.copy(), sigma=float(sigma))
     return (out, info) if return_info else out
 
 

@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 
 from .accuracy import info as bound_info, weakest
-from ._validate import as_delta, as_flag, as_index, as_indices, as_int, as_positive, check_dense_size
+from ._validate import as_delta, as_flag, as_index, as_indices, as_int, check_dense_size
 from .approx import spectral_operator
 from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
                        phi_values, selinv_kernel, selinv_supported)
@@ -32,7 +32,7 @@ from .filters import (
     wave,
 )
 from .kernels import block_sources, heat_kernels, kernel_columns
-from .laplacian import as_laplacian, lambda_max_kind, mass_ratio
+from .laplacian import as_laplacian, lambda_max_kind, mass_ratio, shape_time
 from .progress import progress_bar
 
 __all__ = [
@@ -413,15 +413,23 @@ def pairwise_spectral_distance(lap, filt, seeds, delta: str = "mass", method: st
 # ---------------------------------------------------------------------------------------
 # named distances
 # ---------------------------------------------------------------------------------------
-def diffusion_distance(lap, t, source, targets=None, **kwargs):
+def _timed(lap, t, time_unit):
+    """``(lap, t)``: the Laplacian from any input and ``t`` in absolute units
+    (:mod:`spectral_igl.laplacian.units`)."""
+    lap = as_laplacian(lap)
+    return lap, shape_time(lap, t, time_unit)
+
+
+def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Diffusion distance at time ``t``: :math:`|\varphi|^2(s) = e^{-ts}`.
 
     .. math:: d_t^2(i, j) = \sum_l e^{-t\lambda_l} |x_l(i) - x_l(j)|^2 = K_t(i,i) + K_t(j,j) - 2K_t(i,j)
 
-    with :math:`K_t = e^{-t\tilde L}B^{-1}` the heat kernel. Keyword arguments as in
-    :func:`spectral_distance`.
+    with :math:`K_t = e^{-t\tilde L}B^{-1}` the heat kernel. ``time_unit`` gives ``t`` in the
+    shape's units (:mod:`spectral_igl.laplacian.units`; default ``"absolute"``); other keyword
+    arguments as in :func:`spectral_distance`.
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, heat(t / 2.0), source, targets, **kwargs)
 
 
@@ -457,7 +465,7 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
     return spectral_distance(lap, polyharmonic(k), source, targets, **kwargs)
 
 
-def wave_distance(lap, t, source, targets=None, **kwargs):
+def wave_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Spectral distance of the Schrödinger wave kernel :math:`\varphi(s) = e^{-ist}`.
 
     .. math:: d^2(i, j) = \sum_l |e^{-i\lambda_l t}|^2 |x_l(i) - x_l(j)|^2
@@ -466,16 +474,16 @@ def wave_distance(lap, t, source, targets=None, **kwargs):
     depend on ``t``: it is the B-norm of the difference of the two discrete deltas
     (and grows under refinement). Provided for completeness of the survey's family.
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, wave(t), source, targets, **kwargs)
 
 
-def mexican_hat_distance(lap, t, source, targets=None, **kwargs):
+def mexican_hat_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Mexican-hat distance: :math:`\varphi(s) = t s e^{-ts}`.
 
     .. math:: d^2(i, j) = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(i) - x_l(j)|^2
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, mexican_hat(t), source, targets, **kwargs)
 
 
@@ -543,7 +551,7 @@ class OneToAll:
 # ---------------------------------------------------------------------------------------
 # named pairwise distances: the same filters as the one-to-all functions above
 # ---------------------------------------------------------------------------------------
-def pairwise_diffusion_distance(lap, t, seeds, **kwargs):
+def pairwise_diffusion_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs):
     r"""(m, m) diffusion distances at time ``t`` between ``seeds``; entries equal
     :func:`diffusion_distance`.
 
@@ -552,7 +560,7 @@ def pairwise_diffusion_distance(lap, t, seeds, **kwargs):
     (the filter passed to :func:`pairwise_spectral_distance` is ``heat(t / 2)``).
     Keyword arguments as in :func:`pairwise_spectral_distance`.
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, heat(t / 2.0), seeds, **kwargs)
 
 
@@ -576,19 +584,19 @@ def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
     return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
 
 
-def pairwise_wave_distance(lap, t, seeds, **kwargs):
+def pairwise_wave_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs):
     r"""(m, m) wave-kernel distances, :math:`|\varphi|^2 = 1`; entries equal :func:`wave_distance`.
 
     .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, wave(t), seeds, **kwargs)
 
 
-def pairwise_mexican_hat_distance(lap, t, seeds, **kwargs):
+def pairwise_mexican_hat_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs):
     r"""(m, m) Mexican-hat distances; entries equal :func:`mexican_hat_distance`.
 
     .. math:: D_{ab}^2 = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
     """
-    t = as_positive(t, "t")
+    lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, mexican_hat(t), seeds, **kwargs)

@@ -167,7 +167,10 @@ def write_mesh(path, V, F=None, fields=None) -> None:
     if ext not in _TRI[:4]:
         raise ValueError(f"unsupported mesh format {path.suffix!r}; expected .obj, .off, .ply, .stl, "
                          f".vtu or .vtk")
-    igl.write_triangle_mesh(str(path), V, F)
+    # libigl's ASCII PLY keeps 6 significant digits (a shape at 1e5 moves by 1e-6 of its size);
+    # binary PLY keeps every bit
+    binary = igl.FileEncoding.Binary if ext == ".ply" else igl.FileEncoding.Ascii
+    igl.write_triangle_mesh(str(path), V, F, encoding=binary)
 
 
 # ---- structure checks before libigl's readers ---------------------------------------------

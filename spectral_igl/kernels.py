@@ -18,12 +18,12 @@ import numpy as np
 
 from .accuracy import info as make_info
 from .accuracy import AccuracyWarning, relative_error, warn_missed, weakest
-from ._validate import as_delta, as_flag, as_index, as_indices, as_positive, as_tol, check_dense_size
+from ._validate import as_delta, as_flag, as_index, as_indices, as_tol, check_dense_size
 from .approx import spectral_operator
 from .approx.uniformization import metzler_heat, products_needed
 from .diagonal.multiscale import heat_columns
 from .filters import check_filter, heat
-from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio
+from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, shape_time
 
 __all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
            "block_sources", "MANY_SOURCES"]
@@ -282,12 +282,16 @@ def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: 
 
 def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: str = "auto",
                 tol: float = 1e-8, return_info: bool = False, rtol: float | None = None,
-                floor: float = FLOOR):
+                floor: float = FLOOR, time_unit: str = "absolute"):
     r"""Columns of the heat kernel :math:`K_t = e^{-t\tilde L}B^{-1}`.
 
     .. math:: K_t(:, i) = e^{-t \tilde L} B^{-1} e_i = \sum_l e^{-t\lambda_l} x_l(i)\, x_l
 
-    ``t`` is physical time (no normalisation). On a Metzler operator (lumped mass and
+    ``t`` is in the units ``time_unit`` (:mod:`spectral_igl.laplacian.units`): the default
+    ``"absolute"`` takes it as given (a squared length); ``time_unit="shape"`` multiplies it
+    by the area of a surface (volume\ :sup:`2/3` of a solid), so that ``t=1e-3`` means the
+    same on a scan in millimetres and on the unit sphere; ``"h2"`` by the squared mean edge
+    length. ``info["time"]`` is the absolute time used. On a Metzler operator (lumped mass and
     non-negative weights: :attr:`Laplacian.is_metzler`) the exact kernel is non-negative and
     so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
     source, (n, m) for m sources.
@@ -304,8 +308,8 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     >>> bool(np.all(info["rel_error"][k >= 1e-10 * k.max()] <= 1e-6))
     True
     """
-    t = as_positive(t, "t")
     lap = as_laplacian(lap)
+    t = shape_time(lap, t, time_unit)
     delta = as_delta(delta)
     idx, scalar = source_indices(sources, lap.n)
     if rtol is None and block_sources(lap, method, delta, idx.size):
@@ -315,8 +319,12 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
         K, info = K[:, :, 0], {k: (v[..., 0] if isinstance(v, np.ndarray) and v.ndim >= 2 else
                                    (float(v[0]) if isinstance(v, np.ndarray) and v.shape == (1,) else v))
                                for k, v in info.items()}
+        info["time"] = t
         return (K, info) if as_flag(return_info, "return_info") else K
-    return _kernel(lap, heat(t), sources, delta, method, tol, return_info, rtol, floor)
+    out = _kernel(lap, heat(t), sources, delta, method, tol, return_info, rtol, floor)
+    if isinstance(out, tuple):
+        out[1]["time"] = t
+    return out
 
 
 spectral_kernel.__doc__ = spectral_kernel.__doc__.replace("    {accuracy}\n", _ACCURACY_DOC.lstrip("\n"))
@@ -338,7 +346,7 @@ def block_sources(lap, method, delta, m) -> bool:
 
 
 def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound: bool = False,
-                 return_info: bool = False):
+                 return_info: bool = False, time_unit: str = "absolute"):
     r"""Heat-kernel columns at many times and sources, sharing one set of poles.
 
     .. math:: K_t(:, i) = e^{-t\tilde L}B^{-1}e_i, \qquad
@@ -352,7 +360,8 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     ----------
     lap : Laplacian
     times : (T,) float
-        Positive times.
+        Positive times, in the units ``time_unit`` (as in :func:`heat_kernel`; ``info["times"]``
+        holds the absolute ones).
     sources : int or (m,) int
     tol : float
         Certified B-norm error of each column relative to :math:`\|B^{-1}e_i\|_B`; a time whose
@@ -379,6 +388,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     ((162, 2, 2), True)
     """
     lap = as_laplacian(lap)
+    times = shape_time(lap, times, time_unit, "times")
     lap.warn_if_not_metzler("heat kernel")
     return_bound = as_flag(return_bound, "return_bound")
     return_info = as_flag(return_info, "return_info")
@@ -395,7 +405,8 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
         norm = np.sqrt(1.0 / (mass_ratio(lap) * lap.mass[idx]))          # >= ||B^-1 e_i||_B
         bn = norm[:, None] * eps[None, :]                                  # (m, T)
         err = entry_error(lap, bn.reshape(-1)).reshape(lap.n, idx.size, eps.size)
-        info = make_info(err, lambda_max_kind(lap), "rational", tol=tol, eps=eps, bnorm_error=bn)
+        info = make_info(err, lambda_max_kind(lap), "rational", tol=tol, eps=eps, bnorm_error=bn,
+                         times=np.atleast_1d(times))
         out += (info,)
     if scalar:
         out = (out[0][:, 0, :],) + out[1:]

@@ -14,6 +14,8 @@ from ._validate import as_index, as_int
 from .distances import MAX_ORDER, spectral_distance
 from .filters import FILTERS, by_name
 from .kernels import spectral_kernel
+from .laplacian import as_laplacian
+from .laplacian.units import optional_time, time_label
 
 __all__ = ["QUANTITIES", "FILTERED", "evaluate", "Evaluation", "uses_time", "color_meaning"]
 
@@ -89,7 +91,7 @@ class Evaluation:
 
 def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | None = None,
              method: str = "auto", tol: float = 1e-8, order: int = 3,
-             diagonal: str = "auto") -> Evaluation:
+             diagonal: str = "auto", time_unit: str = "absolute") -> Evaluation:
     r"""Kernel column or distance from one vertex.
 
     Parameters
@@ -105,7 +107,11 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     filter : str
         A name in :data:`spectral_igl.filters.FILTERS`.
     t : float, optional
-        Time/scale of the filters that take one.
+        Time/scale of the filters that take one, in the units ``time_unit``.
+    time_unit : str
+        ``"absolute"`` (default), ``"shape"``, ``"area"``, ``"volume"`` or ``"h2"``
+        (:mod:`spectral_igl.laplacian.units`); the label shows both the relative and the
+        absolute time.
     method, tol
         Passed to the spectrum-free engine.
     diagonal : str
@@ -124,6 +130,9 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
     """
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
+    lap = as_laplacian(lap)
+    given = t
+    t = optional_time(lap, t, time_unit)
     source = as_index(source, lap.n, "source")
     order = as_int(order, "order", lo=1, hi=MAX_ORDER)
     if quantity == "geodesic":
@@ -134,7 +143,7 @@ def evaluate(lap, quantity: str, source: int, filter: str = "heat", t: float | N
         return Evaluation(values, np.nan, time.perf_counter() - start, "geodesic distance (heat method)",
                           method="heat method")
     filt = by_name(filter, t, order)
-    label = f"{filter} {quantity}" + (f", t={t:g}" if FILTERS[filter][1] else "")
+    label = f"{filter} {quantity}" + (f", {time_label(given, t, time_unit)}" if FILTERS[filter][1] else "")
     start = time.perf_counter()
     if quantity == "kernel":
         values, info = spectral_kernel(lap, filt, source, method=method, tol=tol, return_info=True)

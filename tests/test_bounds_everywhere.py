@@ -326,7 +326,8 @@ def test_evaluate_reads_per_entry_bounds():
 @pytest.mark.parametrize("argv, expected", [
     (["distance", "--filter", "biharmonic", "--diagonal", "exact"], "(proof, largest over the entries)"),
     (["kernel", "--filter", "heat", "-t", "0.1"], "(proof, largest over the entries)"),
-    (["hks", "--times", "0.1", "1.0", "--diagonal", "probing"], "(estimate, largest over the entries)"),
+    (["hks", "--times", "0.1", "1.0", "--diagonal", "probing", "--no-normalize"],
+     "(estimate, largest over the entries)"),
     (["smooth", "-t", "0.01"], "(proof, largest over the entries)"),
     (["geodesic"], "error bound: none (")])
 def test_cli_prints_the_bound(argv, expected, capsys):

@@ -201,7 +201,7 @@ def test_hks_against_dense(tmp_path, capsys):
     from data_generators import icosphere
 
     out, png = tmp_path / "h.npy", tmp_path / "h.png"
-    assert main(["hks", "--shape", "sphere", "--level", "2", "--times", "0.01", "0.1",
+    assert main(["hks", "--shape", "sphere", "--level", "2", "--times", "0.01", "0.1", "--no-normalize",
                  "--out", str(out), "--out", str(png)]) == EXIT_OK
     H = np.load(out)
     evals, X = _dense(sig.laplacian(*icosphere(2)))
@@ -327,7 +327,8 @@ def test_distance_written_with_its_mesh(tmp_path, ext):
 
 @IO
 def test_hks_names_its_times(tmp_path):
-    """HKS: the CSV header names the times; a .vtu holds one array per time."""
+    """HKS: the CSV header names the times; a .vtu holds one array per time; by default the
+    values are multiplied by the area (dimensionless)."""
     import meshio
 
     import spectral_igl as sig
@@ -343,7 +344,7 @@ def test_hks_names_its_times(tmp_path):
     evals, X = sig.dense_eigs(lap)
     m = meshio.read(vtu)
     for j, t in enumerate((0.001, 0.01, 0.1)):
-        truth = (X ** 2) @ np.exp(-t * evals)
+        truth = (X ** 2) @ np.exp(-t * evals) * lap.area()
         assert np.max(np.abs(H[:, j] - truth) / truth) < 1e-6
         assert np.allclose(m.point_data[f"t={t:g}"], H[:, j], rtol=1e-9)
 

@@ -288,7 +288,9 @@ def test_cli_batch(client, tmp_path, capsys):
     assert main(args) == 1
     captured = capsys.readouterr()
     assert "skipped 2, failed 1" in captured.out and "failed: c:" in captured.err
-    assert main(["batch", str(tmp_path / "a.obj"), "--job", "hks", "--out", str(out)]) == 2
+    # a time unit with no time to apply it to is a usage error (--job hks alone is valid: its grid)
+    assert main(["batch", str(tmp_path / "a.obj"), "--job", "hks", "--time-unit", "shape",
+                 "--out", str(out)]) == 2
     assert main(["batch", str(tmp_path / "nothing*.obj"), "--job", "hks", "--times", "1",
                  "--out", str(out)]) == 3
 

@@ -1,7 +1,8 @@
 """Applications built on the engine: harmonic functions and critical points, smoothing,
 time-scale selection, geodesic and transport distances, basis functions, waves,
-mean-curvature flow."""
+mean-curvature flow, shape comparison."""
 from .basis import diffusion_basis, feature_points, graph_extrema
+from .compare import heat_trace, shape_distance, shape_distance_matrix, shape_dna
 from .critical_points import CriticalPoints, critical_points
 from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
 from .harmonic import harmonic
@@ -18,4 +19,5 @@ __all__ = [
     "sinkhorn", "wasserstein_distance", "wasserstein_barycenter",
     "diffusion_basis", "feature_points", "graph_extrema",
     "schrodinger", "mean_curvature_flow",
+    "shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix",
 ]

@@ -121,7 +121,7 @@ def critical_points(V, F, f=None) -> CriticalPoints:
     V : (n, 3) float, or a mesh object
         Vertex positions (only their number is used: the test is combinatorial). A
         pyvista, trimesh or meshio triangle mesh may stand for ``(V, F)``: then call
-        ``critical_points(mesh, f)``.
+        ``critical_points(mesh, f)``; so may a pair, ``critical_points((V, F), f)``.
     F : (m, 3) int
         Triangles.
     f : (n,) float
@@ -168,6 +168,8 @@ def critical_points(V, F, f=None) -> CriticalPoints:
     >>> cp.n_minima, cp.n_maxima, cp.n_saddles
     (1, 1, 0)
     """
+    if isinstance(V, (tuple, list)) and len(V) == 2 and f is None:     # critical_points((V, F), f)
+        (V, F), f = V, F
     if is_mesh_object(V) and f is None:
         V, F, f = (*as_mesh_arrays(V), F)
     if f is None:

@@ -7,7 +7,8 @@ import scipy.sparse as sp
 from .._validate import as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe, is_mesh_object
 from ..approx import SpectralOperator
 from ..filters import heat
-from ..laplacian import Laplacian, laplacian
+from ..laplacian import Laplacian, as_laplacian
+from ..laplacian.units import optional_time
 from ..laplacian.intrinsic import edge_lengths, element_sum, intrinsic_delaunay, normalized_gradient_divergence
 from ..laplacian.intrinsic import mollify as mollify_lengths
 from ..laplacian.mesh import element_measures
@@ -131,20 +132,26 @@ def _with_diagonal(L) -> sp.csr_matrix:
     return out
 
 
-def _as_laplacian(lap_or_mesh, mass: str = "lumped") -> Laplacian:
-    if isinstance(lap_or_mesh, Laplacian):
-        lap = lap_or_mesh
-        if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
-            raise ValueError(f"geodesics need a triangle or tet mesh Laplacian (with V and F/T "
-                             f"in lap.data), got domain {lap.domain!r}")
-        return lap
-    if isinstance(lap_or_mesh, (tuple, list)) and len(lap_or_mesh) == 2:
-        V, C = lap_or_mesh
-        return laplacian(V, C, mass=mass)
-    if is_mesh_object(lap_or_mesh):
-        return laplacian(*as_mesh_arrays(lap_or_mesh, name="mesh"), mass=mass)
-    raise TypeError(f"expected a Laplacian, a (V, F) / (V, T) pair or a pyvista/trimesh mesh, "
-                    f"got {describe(lap_or_mesh)}")
+def _as_laplacian(lap_or_mesh) -> Laplacian:
+    lap = as_laplacian(lap_or_mesh, "lap_or_mesh")
+    if lap.domain not in ("triangle", "tet") or "V" not in lap.data:
+        raise ValueError(f"geodesics need a triangle or tet mesh Laplacian (with V and F/T "
+                         f"in lap.data), got domain {lap.domain!r}")
+    return lap
+
+
+def _libigl_order(mesh, source, method):
+    """``(mesh, source, method)`` with libigl's and potpourri3d's positional habit
+    ``f(V, F, source)`` read as ``f((V, F), source)``."""
+    def integer_cells(x):
+        return isinstance(x, np.ndarray) and x.ndim == 2 and x.dtype.kind in "iu" and x.shape[1] in (3, 4)
+
+    if not (isinstance(mesh, np.ndarray) and mesh.ndim == 2 and integer_cells(source)):
+        return mesh, source, method
+    if isinstance(method, str):
+        raise TypeError("geodesic_distance(V, F) needs a source vertex: call "
+                        "geodesic_distance(V, F, source) or geodesic_distance((V, F), source, method=...)")
+    return (mesh, source), method, "heat"
 
 
 def _cells(lap: Laplacian) -> np.ndarray:
@@ -352,13 +359,15 @@ class HeatGeodesics:
 
 
 def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None = None,
-                      step: str = "intrinsic_delaunay", progress=None):
+                      step: str = "intrinsic_delaunay", progress=None, time_unit: str = "absolute"):
     r"""Geodesic distance from ``source`` by the heat method or Varadhan's formula.
 
     Parameters
     ----------
     lap_or_mesh : Laplacian, (V, F) or (V, T), or a pyvista/trimesh/meshio mesh
-        Triangle or tetrahedral mesh.
+        Triangle or tetrahedral mesh (see :mod:`spectral_igl.laplacian.inputs`). libigl's and
+        potpourri3d's order ``geodesic_distance(V, F, source)`` is read as
+        ``geodesic_distance((V, F), source)``.
     source : int or (s,) int
         Source vertex (or vertices: distance to the nearest).
     method : {"heat", "varadhan"}
@@ -373,6 +382,10 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     progress : bool, optional
         Heat method: a progress bar over the precomputation (see
         :mod:`spectral_igl.progress`; default off).
+    time_unit : str
+        Unit of ``t`` (:mod:`spectral_igl.laplacian.units`): ``"absolute"`` (default),
+        ``"shape"``, ``"area"``, ``"volume"`` or ``"h2"`` (``t=1, time_unit="h2"`` is the
+        heat method's default).
 
     Returns
     -------
@@ -380,10 +393,14 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
         ``inf`` exactly on the vertices of connected components that hold no source (e.g.
         vertices no face references): no path reaches them.
     """
+    lap_or_mesh, source, method = _libigl_order(lap_or_mesh, source, method)
     if not isinstance(method, str) or method not in ("heat", "varadhan"):
         raise ValueError(f"method must be 'heat' or 'varadhan', got {describe(method)}")
     if method == "varadhan" and step != "intrinsic_delaunay":
         raise ValueError(f"step applies to method='heat' only, got step={step!r} with method='varadhan'")
+    if time_unit != "absolute":
+        lap_or_mesh = _as_laplacian(lap_or_mesh)
+        t = optional_time(lap_or_mesh, t, time_unit)
     if method == "heat":
         return HeatGeodesics(lap_or_mesh, t=t, step=step, progress=progress).compute(source)
     if method == "varadhan":

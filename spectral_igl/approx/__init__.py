@@ -387,7 +387,7 @@ class SpectralOperator(spla.LinearOperator):
         return self.tol * float(np.sqrt(mass_ratio(lap)))
 
     def _check_tol(self, f, rhs):
-        """Warn, naming the achieved bound, when the bound of the last call misses ``tol`` times
+        r"""Warn, naming the achieved bound, when the bound of the last call misses ``tol`` times
         the input's norm (for a kernel column a lower bound of :math:`\|B^{-1}g\|_B`:
         :math:`(g^\top D^{-1}g)^{1/2}` when B is entrywise non-negative, since then
         :math:`D^{-1}B` has spectral radius 1)."""

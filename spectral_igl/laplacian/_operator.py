@@ -11,7 +11,7 @@ import scipy.sparse.csgraph as csgraph
 from .._validate import describe
 from .cache import Cache
 
-__all__ = ["Laplacian", "make_laplacian", "as_laplacian", "drop_negative_weights"]
+__all__ = ["Laplacian", "make_laplacian", "check_laplacian", "drop_negative_weights"]
 
 
 @dataclass(eq=False)
@@ -146,8 +146,9 @@ class Laplacian:
         )
 
 
-def as_laplacian(lap, name: str = "lap") -> Laplacian:
-    """Validate a Laplacian argument (every public entry point that takes one calls this)."""
+def check_laplacian(lap, name: str = "lap") -> Laplacian:
+    """Validate a Laplacian argument (strict: the package's own stages; public entry points
+    take any input through :func:`spectral_igl.laplacian.inputs.as_laplacian`)."""
     if not isinstance(lap, Laplacian):
         raise TypeError(f"{name} must be a spectral_igl.Laplacian (from sig.laplacian(V, F) or "
                         f"another constructor), got {describe(lap)}")

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._operator import Laplacian, as_laplacian
+from ._operator import Laplacian
+from .inputs import as_laplacian
 
 __all__ = ["mass_ratio", "lambda_max", "lambda_max_kind", "entry_error"]
 

@@ -9,7 +9,8 @@ r"""The engine's sparse linear algebra: factorizations, grounded pseudo-solves, 
 - :mod:`.eigen`: generalized eigenpairs (the truncated baseline and the dense ground truth)
   and the smallest positive eigenvalue.
 """
-from .eigen import cached_eigs, dense_eigs, eigs, lambda_min_positive, lambda_min_positive_kind, negative_inertia
+from .eigen import (cached_eigs, dense_eigs, eigenvalue_bracket, eigs, lambda_min_positive,
+                    lambda_min_positive_kind, negative_inertia)
 from .factor import BACKENDS, Factor, available_backends, factorize
 from .ldlt import LDLT, Pattern
 from .solves import (
@@ -27,4 +28,4 @@ from .solves import (
 __all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
            "shifted_factor", "mass_solve", "pseudo_solve", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "dense_eigs",
-           "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind", "negative_inertia"]
+           "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind", "negative_inertia", "eigenvalue_bracket"]

@@ -9,14 +9,16 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from .._validate import as_int, as_tol, check_dense_size, describe
+from ..accuracy import weakest
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
+from ..laplacian.units import dimension
 from ..progress import progress_bar
 from . import ldlt
 from .factor import factorize
 from .solves import ldlt_factor
 
 __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
-           "negative_inertia"]
+           "negative_inertia", "eigenvalue_bracket"]
 
 
 #: at most this many Lanczos runs per call of :func:`eigs`: the first, then searches of the
@@ -446,3 +448,95 @@ def _lambda_min_positive(lap):
         return max(0.95 * est, 1e-300), "estimate"
 
     return lap.cache.fetch("bound", "lambda_min_positive", build)
+
+
+#: relative width to which :func:`eigenvalue_bracket` narrows its bracket by default
+BRACKET_RTOL = 0.05
+
+#: most inertia counts :func:`eigenvalue_bracket` takes before it reports an estimate
+BRACKET_COUNTS = 16
+
+
+def _weyl(lap, k: int) -> float:
+    r"""Weyl's law for the k-th eigenvalue: :math:`4\pi k/A` on a surface,
+    :math:`(6\pi^2 k/V)^{2/3}` on a solid."""
+    if dimension(lap) == 3:
+        return (6.0 * np.pi ** 2 * k / lap.area()) ** (2.0 / 3.0)
+    return 4.0 * np.pi * k / lap.area()
+
+
+def eigenvalue_bracket(lap: Laplacian, k: int, rtol: float = BRACKET_RTOL):
+    r"""An interval :math:`[lo, hi]` holding :math:`\lambda_k`, the k-th smallest eigenvalue of
+    :math:`\tilde L` (counted from 1, the zeros of ker L included), spectrum-free.
+
+    Spectrum slicing: the number of negative pivots of an :math:`LDL^\top` factorization of
+    :math:`L - \sigma B` is the number :math:`N(\sigma)` of eigenvalues below :math:`\sigma`
+    (Sylvester's law of inertia), so :math:`N(\sigma) < k` gives :math:`\lambda_k \ge \sigma`
+    and :math:`N(\sigma) \ge k` gives :math:`\lambda_k < \sigma`. The first shift is Weyl's law
+    (:math:`4\pi k / A` on a surface of area A), the next ones interpolate the counts as
+    :math:`N \propto \sigma^{d/2}` between the two ends of the bracket, until
+    :math:`hi \le (1 + rtol)\, lo`: a few factorizations, no eigenvector. Each end is moved
+    outwards by the count's backward error (how far rounding in the factorization moves the
+    pencil's eigenvalues). Cached on ``lap``.
+
+    Returns
+    -------
+    lo, hi : float
+        :math:`lo \le \lambda_k \le hi`; for ``k >= n``, ``hi`` is the proved
+        :func:`spectral_igl.lambda_max`.
+    kind : str
+        ``"proof"`` when every count that set an end succeeded, else ``"estimate"`` (the
+        bracket then comes from Lanczos eigenvalues).
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> lo, hi, kind = sig.linalg.eigenvalue_bracket(lap, 50)
+    >>> ev = sig.dense_eigs(lap, k=50)[0]
+    >>> bool(lo <= ev[49] <= hi and hi <= 1.05 * lo), kind
+    (True, 'proof')
+    """
+    lap = as_laplacian(lap)
+    k = as_int(k, "k", lo=1)
+    rtol = as_tol(rtol, "rtol")
+    if k > lap.n:
+        raise ValueError(f"k = {k} is more than the {lap.n} eigenvalues of this Laplacian")
+    if k <= lap.n_components:
+        return 0.0, 0.0, "proof"
+    if k == lap.n:
+        return lambda_min_positive(lap), lambda_max(lap), weakest(lambda_min_positive_kind(lap),
+                                                                   lambda_max_kind(lap))
+    return lap.cache.fetch("bound", ("eigenvalue_bracket", k, rtol), lambda: _bracket(lap, k, rtol))
+
+
+def _bracket(lap, k, rtol):
+    d = dimension(lap) or 2
+    lo, n_lo, kind_lo = lambda_min_positive(lap), lap.n_components, lambda_min_positive_kind(lap)
+    hi, n_hi, kind_hi = lambda_max(lap), lap.n, lambda_max_kind(lap)
+    sigma = min(max(_weyl(lap, k), 1.01 * lo), 0.999 * hi)
+    for _ in range(BRACKET_COUNTS):
+        count, backward = _inertia(lap, sigma)
+        if count is None or backward is None:
+            sigma *= 1.0 + 1e-3           # a zero pivot: move off it
+            continue
+        if count >= k:
+            hi, n_hi, kind_hi = min(hi, sigma + backward), count, "proof"
+        else:
+            lo, n_lo, kind_lo = max(lo, sigma - backward), count, "proof"
+        if hi <= (1.0 + rtol) * lo:
+            return lo, hi, "proof" if kind_lo == kind_hi == "proof" else "estimate"
+        sigma = _next_shift(lo, n_lo, hi, n_hi, k, d)
+    # no bracket within the budget: Lanczos values, said to be an estimate
+    ev = cached_eigs(lap, k)[0]
+    return 0.99 * float(ev[k - 1]), 1.01 * float(ev[k - 1]), "estimate"
+
+
+def _next_shift(lo, n_lo, hi, n_hi, k, d):
+    r"""The next shift: the power law :math:`N \propto \sigma^{d/2}` through the bracket's
+    ends aimed at k - 1/2 eigenvalues, kept a tenth of the bracket inside it."""
+    p = np.log(n_hi / n_lo) / np.log(hi / lo) if n_hi > n_lo else d / 2.0
+    sigma = lo * ((k - 0.5) / n_lo) ** (1.0 / max(p, 1e-3))
+    w = np.log(hi / lo)
+    return float(np.clip(sigma, lo * np.exp(0.1 * w), hi * np.exp(-0.1 * w)))

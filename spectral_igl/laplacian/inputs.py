@@ -1,0 +1,46 @@
+"""One way in: every public function that takes a Laplacian also takes what a user has.
+
+The rule, applied by :func:`as_laplacian` at every public entry point:
+
+* a :class:`Laplacian` is used as it is (build it once with :func:`spectral_igl.laplacian`
+  and reuse it: it caches factorizations and spectral bounds across calls);
+* a pair ``(V, F)`` (triangles) or ``(V, T)`` (tetrahedra), as a tuple or a list, becomes
+  ``spectral_igl.laplacian(V, F)`` with its defaults;
+* a pyvista ``PolyData``/``UnstructuredGrid``, a ``trimesh.Trimesh`` or a ``meshio.Mesh``
+  becomes ``spectral_igl.laplacian`` of its triangles or tetrahedra (polygons are
+  fan-triangulated); one without cells (``trimesh.PointCloud``, a pyvista point set) becomes
+  :func:`spectral_igl.point_cloud_laplacian` of its points.
+
+Anything else is refused with a ``TypeError`` that says which of these to pass; a bare
+``(n, 3)`` array is refused too (a point cloud or half of a mesh? pass
+``point_cloud_laplacian(P)`` or ``(V, F)``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import as_mesh_arrays, describe, is_mesh_object
+from ._operator import Laplacian
+from .mesh import laplacian
+from .points import point_cloud_laplacian
+
+__all__ = ["as_laplacian"]
+
+
+def as_laplacian(x, name: str = "lap") -> Laplacian:
+    """A :class:`Laplacian` from a Laplacian, a ``(V, F)``/``(V, T)`` pair or a mesh object."""
+    if isinstance(x, Laplacian):
+        return x
+    if isinstance(x, (tuple, list)) and len(x) == 2:
+        return laplacian(*x)
+    if is_mesh_object(x):
+        V, C = as_mesh_arrays(x, name=name, need_cells=False)
+        if C is None:
+            return point_cloud_laplacian(V)
+        return laplacian(V, C)
+    hint = ""
+    if isinstance(x, np.ndarray) and x.ndim == 2:
+        hint = (" (an array alone is ambiguous: pass (V, F) as one tuple for a mesh, or "
+                "sig.point_cloud_laplacian(P) for points)")
+    raise TypeError(f"{name} must be a spectral_igl.Laplacian, a (V, F) or (V, T) pair, or a "
+                    f"pyvista/trimesh/meshio mesh; got {describe(x)}{hint}")

@@ -1,0 +1,154 @@
+"""Shape comparison: ShapeDNA and the heat trace against dense eigenvalues, invariances, distances."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+import spectral_igl as sig
+from data_generators import icosphere
+from data_generators.perturb import normal_noise, resample
+from spectral_igl.collection import Job
+
+U = np.finfo(float).eps
+
+
+@pytest.fixture(scope="module")
+def blob():
+    """An irregular closed surface without symmetry: a noisy, randomly resampled icosphere."""
+    V, F = icosphere(2)
+    V = normal_noise(V * [1.0, 0.8, 0.6], F, 0.03, seed=3)
+    return resample(V, F, 0.5, seed=4)
+
+
+@pytest.fixture(scope="module")
+def dense(blob):
+    """Eigenvalues of (L, B) by a dense generalized solver, their rounding allowance, and the area."""
+    lap = sig.laplacian(*blob)
+    lam = np.maximum(sla.eigh(lap.L.toarray(), lap.B.toarray(), eigvals_only=True), 0.0)
+    # a backward-stable dense solver moves each eigenvalue by a few n u lambda_max
+    delta = 16 * lap.n * U * lam[-1]
+    return lap, lam, delta, lap.B.sum()
+
+
+def test_shape_dna_is_the_dense_spectrum_times_the_area(dense):
+    lap, lam, delta, area = dense
+    k = 30
+    v, info = sig.shape_dna(lap, k, return_info=True)
+    assert info["bound_kind"] == "proof" and info["method"] == "eigs" and info["normalize"] == "shape"
+    assert info["abs_error"].shape == (k,) and info["scale"] == pytest.approx(area, rel=1e-14)
+    assert np.all(np.abs(v - lam[:k] * area) <= info["abs_error"] + delta * area)
+    assert np.all(info["abs_error"] < 1e-8 * v.max())
+    # no normalisation: the eigenvalues themselves
+    assert np.allclose(sig.shape_dna(lap, k, normalize=None), v / area, rtol=1e-12, atol=1e-12)
+
+
+def test_heat_trace_is_the_sum_of_exponentials_per_entry(dense):
+    lap, lam, delta, area = dense
+    tau = np.array([1e-3, 1e-2, 0.1, 1.0])
+    z, info = sig.heat_trace(lap, tau, return_info=True)
+    t = tau * area
+    assert np.allclose(info["times"], t, rtol=1e-15) and info["time_unit"] == "shape"
+    exact = np.exp(-np.outer(t, lam)).sum(axis=1)
+    # the truth's own error: |d/dλ e^{-tλ}| <= t, over n eigenvalues each off by delta
+    allowance = lap.n * t * delta + 4 * lap.n * U * exact
+    assert info["bound_kind"] == "proof" and info["abs_error"].shape == (4,)
+    assert np.all(np.abs(z - exact) <= info["abs_error"] + allowance)
+    assert np.all(info["abs_error"] < 1e-6 * exact)
+    # at large times only the constants remain: one component
+    assert z[-1] == pytest.approx(1.0, abs=1e-6)
+    # a scalar time gives a float and a float bound
+    z1, i1 = sig.heat_trace(lap, 0.1, return_info=True)
+    assert isinstance(z1, float) and isinstance(i1["abs_error"], float)
+    assert abs(z1 - exact[2]) <= i1["abs_error"] + allowance[2]
+
+
+def _permuted(V, F, seed):
+    p = np.random.default_rng(seed).permutation(len(V))
+    inv = np.empty_like(p)
+    inv[p] = np.arange(len(p))
+    return V[p], inv[F]
+
+
+@pytest.mark.parametrize("signature", ["shape_dna", "heat_trace"])
+def test_signatures_are_invariant_to_scale_and_vertex_order(blob, signature):
+    V, F = blob
+    fn = sig.shape_dna if signature == "shape_dna" else sig.heat_trace
+    kw = {"k": 20} if signature == "shape_dna" else {"times": [3e-3, 3e-2, 0.3]}
+    ref, info = fn(sig.laplacian(V, F), return_info=True, **kw)
+    for other in [(1e-3 * V, F), (1e3 * V, F), _permuted(V, F, 5)]:
+        got, ginfo = fn(sig.laplacian(*other), return_info=True, **kw)
+        # the two results are each within their bound of the same exact (scale-free) value
+        assert np.all(np.abs(got - ref) <= info["abs_error"] + ginfo["abs_error"])
+        assert np.all(info["abs_error"] < 1e-6 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("signature", ["shape_dna", "heat_trace"])
+def test_distance_zero_for_one_shape_symmetric_and_bounded(blob, signature):
+    V, F = blob
+    kw = {"k": 20} if signature == "shape_dna" else {"times": [3e-3, 3e-2, 0.3]}
+    a, b = sig.laplacian(V, F), sig.laplacian(*icosphere(2))
+    assert sig.shape_distance(a, a, signature, **kw) == 0.0
+    # the same shape at another scale: zero up to the bounds of the two signatures
+    d_scaled, info_s = sig.shape_distance(a, (1e2 * V, F), signature, return_info=True, **kw)
+    assert d_scaled <= info_s["abs_error"]
+    d_ab, info = sig.shape_distance(a, b, signature, return_info=True, **kw)
+    assert d_ab == sig.shape_distance(b, a, signature, **kw)
+    assert info["bound_kind"] == "proof" and info["abs_error"] < 1e-3 * d_ab
+    # the matrix over precomputed signatures agrees with the pairwise distances
+    fn = sig.shape_dna if signature == "shape_dna" else sig.heat_trace
+    S = [fn(x, **kw) for x in (a, b, a)]
+    D = sig.shape_distance_matrix(S, signature)
+    assert np.array_equal(D, D.T) and np.all(np.diag(D) == 0) and D[0, 2] == 0
+    assert D[0, 1] == pytest.approx(d_ab, rel=1e-13)
+
+
+def test_shape_dna_distance_is_lapy_s_reweighted_euclidean(dense):
+    lap, lam, delta, area = dense
+    b = sig.laplacian(*icosphere(2))
+    lb = sla.eigh(b.L.toarray(), b.B.toarray(), eigvals_only=True)[:10] * b.B.sum()
+    la = lam[:10] * area
+    i = np.arange(1, 10)
+    expected = np.linalg.norm(la[1:] / i - lb[1:] / i)
+    d, info = sig.shape_distance(lap, b, "shape_dna", k=10, return_info=True)
+    # the dense truth is itself off by up to delta per eigenvalue (and b's by its own)
+    delta_b = 16 * b.n * U * sla.eigh(b.L.toarray(), b.B.toarray(), eigvals_only=True)[-1]
+    allowance = np.linalg.norm((delta * area + delta_b * b.B.sum()) / i)
+    assert abs(d - expected) <= info["abs_error"] + allowance
+    assert info["abs_error"] < 1e-8 * d
+
+
+def test_jobs_store_the_signatures_with_their_bounds(blob):
+    lap = sig.laplacian(*blob)
+    arrays, bounds = Job.heat_trace([1e-2, 0.1])("blob", lap)
+    z, info = sig.heat_trace(lap, [1e-2, 0.1], return_info=True)
+    assert np.array_equal(arrays["heat_trace"], z)
+    assert np.array_equal(arrays["heat_trace_abs_error"], info["abs_error"])
+    assert bounds["bound_kind"] == "proof" and bounds["time_unit"] == "shape"
+    assert np.allclose(bounds["absolute_times"], info["times"])
+    arrays, bounds = Job.shape_dna(8)("blob", lap)
+    assert np.array_equal(arrays["shape_dna"], sig.shape_dna(lap, 8))
+    assert arrays["shape_dna_abs_error"].shape == (8,) and bounds["bound_kind"] == "proof"
+    assert Job.shape_dna(8).key() != Job.shape_dna(9).key()
+    assert Job.heat_trace().params["times"] is None
+
+
+def test_bad_input_is_refused_with_a_message(blob):
+    V, F = blob
+    lap = sig.laplacian(V, F)
+    with pytest.raises(ValueError, match="lumped"):
+        sig.heat_trace(sig.laplacian(V, F, mass="full"), [0.1])
+    with pytest.raises(ValueError, match="signature"):
+        sig.shape_distance(lap, lap, "eigenvalues")
+    with pytest.raises(ValueError, match="k must be below"):
+        sig.shape_dna(lap, lap.n)
+    with pytest.raises(ValueError, match="normalize"):
+        sig.shape_dna(lap, 5, normalize="metres")
+    with pytest.raises(ValueError, match="time_unit"):
+        sig.heat_trace(lap, time_unit="absolute")
+    with pytest.raises(ValueError, match="signatures"):
+        sig.shape_distance_matrix([1.0, 2.0])
+    with pytest.raises(ValueError, match="positive"):
+        sig.shape_distance_matrix([[1.0, -2.0], [1.0, 2.0]])
+    with pytest.raises(ValueError, match="normalize"):
+        Job.shape_dna(5, normalize="metres")
