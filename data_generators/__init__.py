@@ -1,17 +1,16 @@
-"""Generated shapes with known answers, for tests, examples and benchmarks.
+"""The generated shapes of :mod:`spectral_igl.data_generators`, under the repository's short name.
 
-Run ``python -m data_generators --help`` to write them to files.
+``from data_generators import icosphere`` and ``from data_generators.perturb import ...``
+(tests, examples, benchmarks of this repository) and ``python -m data_generators`` keep
+working from a checkout; installed packages reach the same modules as
+``spectral_igl.data_generators``.
 """
-from .flat_torus import flat_torus, flat_torus_eigenvalues, flat_torus_laplacian
-from .perturb import (gaussian_noise, make_holes, mean_edge_length, midpoint_subdivide,
-                      normal_noise, resample, sample_points, vertex_normals, volume_from_surface)
-from .shapes import box_eigenvalues, box_tets, icosphere, sphere_eigenvalues
-from .surfaces import (box_voxel_eigenvalues, box_voxels, cylinder, cylinder_eigenvalues,
-                       quad_sphere, sphere_points, torus, uv_sphere)
+import importlib
+import sys
 
-__all__ = ["icosphere", "uv_sphere", "sphere_eigenvalues", "sphere_points", "torus", "cylinder",
-           "cylinder_eigenvalues", "box_tets", "box_eigenvalues", "box_voxels",
-           "box_voxel_eigenvalues", "gaussian_noise", "normal_noise", "resample", "make_holes",
-           "sample_points", "midpoint_subdivide", "volume_from_surface", "vertex_normals",
-           "mean_edge_length",
-           "flat_torus", "flat_torus_laplacian", "flat_torus_eigenvalues", "quad_sphere"]
+from spectral_igl.data_generators import *  # noqa: F401,F403
+from spectral_igl.data_generators import __all__  # noqa: F401
+
+# the submodules are the package's own module objects, not second copies
+for _sub in ("flat_torus", "perturb", "shapes", "surfaces"):
+    sys.modules[f"{__name__}.{_sub}"] = importlib.import_module(f"spectral_igl.data_generators.{_sub}")

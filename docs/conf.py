@@ -38,7 +38,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "api/generated/*.md"]
+exclude_patterns = ["_build", "_static", "api/generated/*.md", "gallery/*.md"]   # gallery/captions.md: data
 templates_path = ["_templates"]
 root_doc = "index"
 
@@ -62,10 +62,12 @@ suppress_warnings = ["myst.header"]   # README sections start at ### under a pag
 # --- HTML --------------------------------------------------------------------------------
 html_theme = "alabaster"
 html_title = f"spectral_igl {release}"
-html_static_path = []
+html_static_path = ["_static"]
 html_theme_options = {
     "description": "Laplacian spectral kernels and distances on 3D shapes, spectrum-free and certified",
     "page_width": "1100px",
     "sidebar_width": "240px",
 }
+# MathJax is served with the pages (docs/_static/mathjax), so they read offline: no CDN
+mathjax_path = "mathjax/tex-chtml-full.js"
 mathjax3_config = {"tex": {"macros": {"R": r"\mathbb{R}"}}}

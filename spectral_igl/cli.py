@@ -329,7 +329,7 @@ def _load_shape(args):
         except (ValueError, TypeError, RuntimeError, OSError, MemoryError) as err:
             raise CLIError(f"cannot read {args.mesh}: {err}", EXIT_INPUT) from err
         return V, C, Path(args.mesh).stem
-    import data_generators as dg
+    import spectral_igl.data_generators as dg
 
     level = int(args.level)
     if not 1 <= level <= 7:

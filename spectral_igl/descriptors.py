@@ -73,7 +73,7 @@ def hks_times(lap, n: int = GRID_SIZE, k: int = BAND):
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(3)
     >>> t = sig.hks_times(sig.laplacian(V, F), n=5, k=50)
     >>> T = sig.hks_times(sig.laplacian(10 * V, F), n=5, k=50)

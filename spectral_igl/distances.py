@@ -193,7 +193,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> d = sig.spectral_distance(lap, sig.filters.biharmonic(), 0)
     >>> d.shape, float(d[0])
@@ -510,7 +510,7 @@ class OneToAll:
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> solver = sig.OneToAll(lap, sig.filters.biharmonic())
     >>> d0, d5 = solver.distance(0), solver.distance(5)

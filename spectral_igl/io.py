@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._extras import require
 from ._validate import as_cells, as_mesh_arrays, as_points, as_signal, describe
 
 __all__ = ["read_mesh", "write_mesh", "check_mesh_file"]
@@ -173,7 +174,7 @@ def write_mesh(path, V, F=None, fields=None) -> None:
     Examples
     --------
     >>> import tempfile, pathlib, numpy as np, meshio
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> from spectral_igl.io import write_mesh
     >>> V, F = icosphere(1)
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "z.vtu"
@@ -190,7 +191,7 @@ def write_mesh(path, V, F=None, fields=None) -> None:
     if ext in (".vtu", ".vtk") or (ext == ".ply" and point_data):
         if ext == ".ply" and F.shape[1] == 4:
             raise ValueError(f"tetrahedra cannot be written to .ply; use .vtu or .vtk for {path.name}")
-        import meshio
+        meshio = require("meshio", "io", f"writing {ext} files")
 
         cell = "tetra" if F.shape[1] == 4 else "triangle"
         cells = F.astype(np.int32) if ext == ".ply" else F    # PLY indices are 32-bit

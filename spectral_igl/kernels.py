@@ -268,7 +268,7 @@ def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: 
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> k, info = sig.spectral_kernel(lap, sig.filters.heat(0.1), 0, return_info=True)
     >>> k.shape, info["bound_kind"], bool(info["abs_error"].max() < 1e-6)
@@ -299,7 +299,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> K = sig.heat_kernel(lap, 0.05, [0, 1])
     >>> bool(np.allclose(K.T @ lap.B @ np.ones(lap.n), 1.0))  # heat is conserved
@@ -381,7 +381,7 @@ def heat_kernels(lap: Laplacian, times, sources, tol: float = 1e-8, return_bound
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> K = sig.kernels.heat_kernels(lap, [0.01, 0.1], [0, 3])
     >>> K.shape, bool(np.allclose(K[:, 1, 1], sig.heat_kernel(lap, 0.1, 3)))

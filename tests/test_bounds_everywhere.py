@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg as sl
+from _needs import CLUSTER
 from data_generators import icosphere
 
 import spectral_igl as sig
@@ -346,6 +347,7 @@ def test_cli_distance_bound_is_the_largest_entry_bound(capsys):
     assert printed == pytest.approx(info["abs_error"].max(), rel=1e-2)
 
 
+@CLUSTER
 def test_store_round_trips_the_bound(tmp_path):
     V, Fc = icosphere(2)
     lap = mesh("sphere")

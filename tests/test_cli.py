@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _needs import IO, VIZ
 
 from spectral_igl.cli import EXIT_INPUT, EXIT_OK, EXIT_USAGE, main
 
@@ -105,6 +106,7 @@ def _dense_distance(lap, i, phi2):
     return np.sqrt(np.maximum(((X - X[i]) ** 2) @ phi2(evals), 0))
 
 
+@VIZ
 def test_distance_writes_npy_csv_png(tmp_path, capsys):
     from test_viz import assert_not_blank
 
@@ -157,6 +159,7 @@ def test_kernel_on_mesh_files(tmp_path):
     assert np.load(out) @ (lap.B @ np.ones(lap.n)) == pytest.approx(1.0, abs=1e-7)  # heat conserved
 
 
+@VIZ
 def test_view_screenshot(tmp_path):
     from test_viz import assert_not_blank
 
@@ -192,6 +195,7 @@ def test_generated_shapes_torus_cylinder(tmp_path):
         assert np.max(np.abs(d - truth)) < 1e-6 * truth.max(), shape
 
 
+@VIZ
 def test_hks_against_dense(tmp_path, capsys):
     import spectral_igl as sig
     from data_generators import icosphere
@@ -210,6 +214,7 @@ def test_hks_against_dense(tmp_path, capsys):
     assert "hks at 2 times" in capsys.readouterr().out
 
 
+@VIZ
 def test_smooth_signal_and_shape(tmp_path, capsys):
     import spectral_igl as sig
     from data_generators import icosphere
@@ -249,6 +254,7 @@ def test_smooth_signal_and_shape(tmp_path, capsys):
     assert err(W) < err(noisy) and err(W) < err(np.asarray(sig.diffusion_smooth(lapn, noisy, h * h)))
 
 
+@VIZ
 def test_geodesic_on_the_sphere(tmp_path, capsys):
     from data_generators import icosphere
 
@@ -274,6 +280,7 @@ def test_computation_errors_exit_1(capsys):
     assert "failed" in err and "heat filter only" in err and "Traceback" not in err
 
 
+@VIZ
 def test_real_meshes(shared_meshes, tmp_path):
     """Triangle meshes with one and several components, and a tetrahedral mesh."""
     from test_viz import assert_not_blank
@@ -299,6 +306,7 @@ def test_real_meshes(shared_meshes, tmp_path):
 
 
 # ---- fields written with their mesh ------------------------------------------------------
+@IO
 @pytest.mark.parametrize("ext", [".vtu", ".vtk", ".ply"])
 def test_distance_written_with_its_mesh(tmp_path, ext):
     """--out x.vtu/.vtk/.ply: the mesh and the distance as point data, equal to the .npy."""
@@ -317,6 +325,7 @@ def test_distance_written_with_its_mesh(tmp_path, ext):
     assert d[3] == 0.0 and d.max() > 0
 
 
+@IO
 def test_hks_names_its_times(tmp_path):
     """HKS: the CSV header names the times; a .vtu holds one array per time; by default the
     values are multiplied by the area (dimensionless)."""
@@ -340,6 +349,7 @@ def test_hks_names_its_times(tmp_path):
         assert np.allclose(m.point_data[f"t={t:g}"], H[:, j], rtol=1e-9)
 
 
+@IO
 def test_smooth_signal_written_with_its_mesh(tmp_path, capsys):
     """A smoothed signal goes to .vtu with its mesh; .obj (no fields) is refused for it."""
     import meshio

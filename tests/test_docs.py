@@ -57,6 +57,9 @@ def test_sphinx_build_without_warnings(tmp_path):
     # API pages rendered from the docstrings, with their math
     page = (out / "generated" / "spectral_igl.kernel_diagonal.html").read_text(encoding="utf-8")
     assert "G_{ii} = \\sum_l" in page and "Parameters" in page and "mathjax" in page.lower()
+    # MathJax is served with the pages (they read offline), not loaded from a CDN
+    assert '_static/mathjax/tex-chtml-full.js' in page and "cdn." not in page, page[:3000]
+    assert (out / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").is_dir()
     # the gallery shows every picture, the tables page the README's measured tables
     gallery = (out / "gallery.html").read_text(encoding="utf-8")
     for png in sorted((DOCS / "gallery").glob("*.png")):

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _needs import VIZ
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -22,7 +23,7 @@ SCRIPTS = [
 ]
 
 
-pytestmark = pytest.mark.usefixtures("one_blas_thread")
+pytestmark = [VIZ, pytest.mark.usefixtures("one_blas_thread")]   # every script draws its pictures
 
 
 def scripts():

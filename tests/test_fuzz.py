@@ -28,6 +28,7 @@ from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _needs import TET  # noqa: E402
 from fuzz_cases import FUNCTIONS, MUST_REFUSE, POOLS  # noqa: E402
 
 LONG = os.environ.get("SPECTRAL_IGL_FUZZ", "") == "long"
@@ -121,7 +122,11 @@ def _fail(case, res):
     return f"{res['outcome']}: {case['name']}({json.dumps(case['kwargs'])[:300]}) -> {res['detail']}"
 
 
-@pytest.mark.parametrize("name", sorted(FUNCTIONS))
+#: every template; tetrahedralize only where its extra (pytetwild) is installed
+NAMES = [pytest.param(n, marks=TET) if n == "tetrahedralize" else n for n in sorted(FUNCTIONS)]
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_valid_call_is_finite(worker, name):
     """The valid arguments of each template work: a finite result, no refusal."""
     case = {"name": name, "kwargs": _valid(name)}
@@ -129,7 +134,7 @@ def test_valid_call_is_finite(worker, name):
     assert res["outcome"] == "ok", _fail(case, res)
 
 
-@pytest.mark.parametrize("name", sorted(FUNCTIONS))
+@pytest.mark.parametrize("name", NAMES)
 def test_hostile_input(worker, name):
     """Hostile values in one or two parameters: a finite result or a ValueError/TypeError."""
     # no shrinking: the cases are small already, and shrinking a hang would repeat it

@@ -1,8 +1,11 @@
 """tetrahedralize: a closed surface becomes a volume whose Laplacian has the right measure."""
 import numpy as np
 import pytest
+from _needs import TET
 
 import spectral_igl as sig
+
+pytestmark = TET
 from data_generators import icosphere, volume_from_surface
 
 

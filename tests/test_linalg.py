@@ -69,6 +69,7 @@ def test_minimum_degree_ordering_factor_matches_dense(rng):
 
     if not ldlt.available():
         pytest.skip("compiled LDLT not built")
+    pytest.importorskip("pymetis")
     lap = sig.laplacian(*icosphere(4))
     A = (lap.B + 0.01 * lap.L).tocsc()
     perm = ldlt.minimum_degree(A)
@@ -96,6 +97,7 @@ def test_auto_ordering_keeps_minimum_degree_on_a_small_surface_and_nested_dissec
 
     if not ldlt.available():
         pytest.skip("compiled LDLT not built")
+    pytest.importorskip("pymetis")
     for lap, want in ((sig.laplacian(*icosphere(4)), "minimum_degree"), (sig.laplacian(*box_tets((14, 14, 14))), "nested_dissection")):
         A = (lap.B + lap.L).tocsc()
         auto = ldlt.Pattern(A)
@@ -108,6 +110,28 @@ def test_auto_ordering_keeps_minimum_degree_on_a_small_surface_and_nested_dissec
             assert md.symbolic.flops <= ldlt.AUTO_WIDTH * md.nnz_L
         else:                               # a volume: minimum degree's fronts are wide and costlier
             assert md.symbolic.flops > ldlt.AUTO_WIDTH * md.nnz_L and nd.symbolic.flops < md.symbolic.flops
+
+
+def test_without_metis_auto_keeps_minimum_degree_and_nested_dissection_names_the_extra(monkeypatch):
+    import sys
+
+    from data_generators import box_tets
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("compiled LDLT not built")
+    monkeypatch.setattr(ldlt, "has_metis", lambda: False)
+    monkeypatch.setitem(sys.modules, "pymetis", None)        # import pymetis raises ImportError
+    lap = sig.laplacian(*box_tets((14, 14, 14)))        # a volume: auto would try nested dissection
+    A = (lap.B + lap.L).tocsc()
+    auto = ldlt.Pattern(A)
+    assert auto.ordering == "minimum_degree"
+    assert auto.symbolic.flops > ldlt.AUTO_WIDTH * auto.nnz_L
+    b = np.ones(lap.n)
+    x = ldlt.LDLT(A, auto).solve(b)
+    assert np.linalg.norm(A @ x - b) < 1e-10 * np.linalg.norm(b)
+    with pytest.raises(ImportError, match=r'^the nested-dissection ordering needs pymetis: pip install "spectral-igl\[metis\]"$'):
+        ldlt.Pattern(A, ordering="nested_dissection")
 
 
 @pytest.mark.parametrize("dtype", [float, complex])
@@ -178,6 +202,7 @@ def test_minimum_degree_on_disconnected_graph_with_isolated_vertices_and_a_dense
 
     if not ldlt.available():
         pytest.skip("compiled LDLT not built")
+    pytest.importorskip("pymetis")
     # a 30 x 30 grid (0..899), a path (900..959), 40 isolated vertices (960..999) and a hub
     # (1000) joined to every grid vertex: 900 entries > 10 sqrt(n), a dense row
     g = np.arange(900).reshape(30, 30)

@@ -82,7 +82,7 @@ def ill_conditioned():
     return out
 
 
-@pytest.mark.skipif(not available(), reason="compiled LDLT or pymetis missing")
+@pytest.mark.skipif(not available(), reason="compiled LDLT missing")
 @pytest.mark.parametrize("p", [1, 2, 3, 4])
 def test_selinv_power_diagonal_bound_covers_rounding(ill_conditioned, p):
     """The exact paths (s^-1, s^-2: grounded inverse; s^-3, s^-4: circle rule) used to report a

@@ -9,7 +9,7 @@ from data_generators import box_tets, icosphere
 from spectral_igl.linalg.ldlt import LDLT, Pattern, available
 
 F = pytest.importorskip("spectral_igl.filters")
-pytestmark = pytest.mark.skipif(not available(), reason="compiled LDLT or pymetis missing")
+pytestmark = pytest.mark.skipif(not available(), reason="compiled LDLT missing")
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,10 @@ import sys
 
 import numpy as np
 import pytest
+from _needs import VIZ
 
 from spectral_igl.viz import colormap, levelset_values, plot_levelsets  # noqa: E402
+
 
 
 def image_stats(path_or_img):
@@ -32,7 +34,7 @@ def colour_fraction(img, rgb, tol=60):
     return float(np.mean(d < tol))
 
 
-pytestmark = pytest.mark.usefixtures("one_blas_thread")
+pytestmark = [VIZ, pytest.mark.usefixtures("one_blas_thread")]
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +65,7 @@ def test_missing_extra_names_the_install(monkeypatch):
         return real_import(name, *a, **k)
 
     monkeypatch.setattr(builtins, "__import__", fake)
-    with pytest.raises(ImportError, match=r'pip install "spectral_igl\[viz\]"'):
+    with pytest.raises(ImportError, match=r'pip install "spectral-igl\[viz\]"'):
         _backend.pyvista()
 
 

@@ -1,7 +1,7 @@
 """Sphinx helpers of the spectral_igl documentation.
 
 ``.. gallery::`` shows every ``docs/gallery/*.png`` as a figure, captioned with the text the
-README's gallery table gives it (the file name when the README does not mention it).
+table of ``docs/gallery/captions.md`` gives it (the file name when the table does not mention it).
 Short Python references in docstrings (``:func:`graph_extrema```) are resolved to the one
 documented object of that name; see :func:`resolve_short_names`.
 """
@@ -19,7 +19,7 @@ GALLERY = ROOT / "docs" / "gallery"
 
 
 def readme_captions(readme: Path) -> dict[str, str]:
-    """``{png file name: caption}`` from the README's ``![](docs/gallery/X.png) caption`` cells."""
+    """``{png file name: caption}`` from the ``![](docs/gallery/X.png) caption`` cells of ``readme``."""
     if not readme.is_file():
         return {}
     text = readme.read_text(encoding="utf-8")
@@ -30,7 +30,7 @@ def readme_captions(readme: Path) -> dict[str, str]:
 
 
 class Gallery(SphinxDirective):
-    """Every PNG of ``docs/gallery`` with its README caption, in file-name order."""
+    """Every PNG of ``docs/gallery`` with its caption, in file-name order."""
 
     has_content = False
 
@@ -39,7 +39,7 @@ class Gallery(SphinxDirective):
         if not pngs:
             return [nodes.paragraph(text="No pictures in docs/gallery yet: run "
                                          "python examples/make_gallery.py.")]
-        captions = readme_captions(ROOT / "README.md")
+        captions = readme_captions(GALLERY / "captions.md")
         here = Path(self.env.doc2path(self.env.docname)).parent
         lines = []
         for png in pngs:

@@ -80,7 +80,7 @@ def shape_dna(lap, k: int = 50, normalize: str | None = "shape", return_info: bo
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(3)
     >>> a, info = sig.shape_dna(sig.laplacian(V, F), 10, return_info=True)
     >>> b = sig.shape_dna(sig.laplacian(1e3 * V, F), 10)
@@ -157,7 +157,7 @@ def heat_trace(lap, times=None, time_unit: str = "shape", method: str = "auto", 
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(3)
     >>> z, info = sig.heat_trace(sig.laplacian(V, F), [1e-2, 1.0], return_info=True)
     >>> Z = sig.heat_trace(sig.laplacian(1e-3 * V, F), [1e-2, 1.0])
@@ -260,7 +260,7 @@ def shape_distance(a, b, signature: str = "heat_trace", return_info: bool = Fals
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(2)
     >>> sig.shape_distance((V, F), (10 * V, F), "shape_dna", k=10) < 1e-9
     True

@@ -162,7 +162,7 @@ def critical_points(V, F, f=None) -> CriticalPoints:
     Examples
     --------
     >>> import numpy as np
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(2)
     >>> cp = critical_points(V, F, V[:, 2])
     >>> cp.n_minima, cp.n_maxima, cp.n_saddles

@@ -118,7 +118,7 @@ class HeatGeodesics:
     Examples
     --------
     >>> import numpy as np
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(4)
     >>> d = HeatGeodesics((V, F)).compute(0)
     >>> exact = np.arccos(np.clip(V @ V[0], -1, 1))

@@ -85,7 +85,7 @@ def harmonic(lap, fixed, values, k: int = 1):
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(2); lap = sig.laplacian(V, F)
     >>> h = harmonic(lap, [0, 5], [0.0, 1.0])
     >>> float(h[0]), float(h[5]), bool(h.min() >= 0 and h.max() <= 1)

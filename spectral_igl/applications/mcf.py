@@ -78,7 +78,7 @@ def mean_curvature_flow(V, F, dt: float = 1e-3, steps: int = 10, conformal: bool
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
-    >>> from data_generators import icosphere, gaussian_noise
+    >>> from spectral_igl.data_generators import icosphere, gaussian_noise
     >>> V, F = icosphere(3)
     >>> X = sig.mean_curvature_flow(gaussian_noise(V, 0.02, seed=0), F, steps=5)
     >>> r = np.linalg.norm(X - X.mean(0), axis=1)

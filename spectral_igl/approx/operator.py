@@ -78,7 +78,7 @@ class SpectralOperator(spla.LinearOperator):
     --------
     >>> import numpy as np, spectral_igl as sig
     >>> from spectral_igl import filters
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(3))
     >>> op = sig.SpectralOperator(lap, filters.heat(0.01), method="rational")
     >>> u = op.apply(np.ones(lap.n))          # heat preserves constants
@@ -353,7 +353,7 @@ def spectral_operator(lap: Laplacian, filt, method: str = "auto", tol: float = 1
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> a = sig.spectral_operator(lap, sig.filters.heat(0.1))
     >>> a is sig.spectral_operator(lap, sig.filters.heat(0.1))

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._extras import require
 from .._validate import as_flag, describe
 from .._version import __version__
 from .jobs import Job
@@ -467,6 +468,7 @@ def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, re
         summary.seconds = time.perf_counter() - t_start
         return summary
 
+    require("distributed", "cluster", "spectral_igl.collection")
     from distributed import progress as dask_progress
     from distributed import wait
 

@@ -125,7 +125,7 @@ class Job:
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> job = Job.hks([0.1, 1.0])
     >>> arrays, bounds = job("sphere", sig.laplacian(*icosphere(2)))
     >>> arrays["hks"].shape, arrays["hks_abs_error"].shape, len(bounds["abs_error_bound"])

@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._extras import require
+
 __all__ = ["ShapeResult", "Loaded", "load", "write_record", "read_record", "check_record",
            "clean_partial", "check_name", "lock_store", "StoreInUse", "PARTIAL", "LOCK", "LAYOUT",
            "BOUND_SUFFIX"]
@@ -44,11 +46,7 @@ BOUND_SUFFIX = "_abs_error"
 
 
 def _zarr():
-    try:
-        import zarr
-    except ImportError as err:  # pragma: no cover - a dependency
-        raise ImportError("spectral_igl.collection needs zarr 3 (Python >= 3.11): "
-                          "pip install 'zarr>=3,<4'") from err
+    zarr = require("zarr", "cluster", "spectral_igl.collection")
     if int(zarr.__version__.split(".")[0]) < 3:
         raise ImportError(f"spectral_igl.collection needs zarr >= 3, found {zarr.__version__}")
     return zarr

@@ -343,7 +343,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
 
     if method == "selinv":
         if not selinv_supported(lap, filt, delta):
-            raise ValueError("method='selinv' needs the compiled extension and pymetis, a real filter, "
+            raise ValueError("method='selinv' needs the compiled extension, a real filter, "
                              "and a lumped mass for delta='seed'")
         samples = int(min(max(samples, 0), n))
         rng = np.random.default_rng(seed)

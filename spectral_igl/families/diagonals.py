@@ -77,7 +77,7 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
     """
     lap = as_laplacian(lap)
     if not ldlt.available():
-        raise ValueError("common-pole diagonals need the compiled LDLT extension and pymetis")
+        raise ValueError("common-pole diagonals need the compiled LDLT extension")
     b = lambda_max(lap)
     targets = np.broadcast_to(np.asarray(targets, dtype=float), (len(filters),))
     filters = list(filters)
@@ -163,7 +163,7 @@ def heat_diagonals(lap, times, tol: float = 1e-8) -> MultiDiagonal:
     --------
     >>> import numpy as np, spectral_igl as sig
     >>> from spectral_igl.families import heat_diagonals
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> md = heat_diagonals(lap, [0.01, 0.03, 0.1])
     >>> md.values.shape, bool(np.all(md.abs_bound < 1e-6 * md.values))

@@ -69,7 +69,7 @@ def lambda_max(lap: Laplacian) -> float:
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> ev, _ = sig.dense_eigs(lap)
     >>> bool(ev[-1] <= sig.lambda_max(lap))

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._extras import require
 from .._validate import as_cells, as_flag, as_mesh_arrays, as_points, as_positive, as_real_in
 from .elements import element_measures
 
@@ -51,7 +52,7 @@ def tetrahedralize(V, F=None, edge_length_fac: float = 0.05, edge_length_abs: fl
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> Vt, T = sig.tetrahedralize(*icosphere(2), edge_length_fac=0.2)
     >>> T.shape[1]
     4
@@ -117,6 +118,7 @@ def _run_tetwild(V, F, timeout, kwargs):
     """fTetWild in a child process: (Vt, T), or a ValueError after ``timeout`` seconds."""
     import multiprocessing as mp
 
+    require("pytetwild", "tet", "tetrahedralize")  # here, not in the child: one clear line
     ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_tetwild_child, args=(send, V, F, kwargs), daemon=True)

@@ -111,7 +111,7 @@ def shape_time(lap: Laplacian, t, unit: str = "shape", name: str = "t"):
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(2)
     >>> lap, big = sig.laplacian(V, F), sig.laplacian(1e3 * V, F)
     >>> t, T = sig.shape_time(lap, 1e-3), sig.shape_time(big, 1e-3)

@@ -112,7 +112,7 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> ev, X, info = sig.eigs(lap, 9, return_info=True)
     >>> info["bound_kind"], info["count"], bool(info["abs_error"].max() < 1e-9)
@@ -414,7 +414,7 @@ def lambda_min_positive(lap: Laplacian) -> float:
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> ev, _ = sig.dense_eigs(lap, k=2)
     >>> lo = sig.lambda_min_positive(lap)
@@ -494,7 +494,7 @@ def eigenvalue_bracket(lap: Laplacian, k: int, rtol: float = BRACKET_RTOL):
     Examples
     --------
     >>> import spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(3))
     >>> lo, hi, kind = sig.linalg.eigenvalue_bracket(lap, 50)
     >>> ev = sig.dense_eigs(lap, k=50)[0]

@@ -17,6 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._extras import require
 from .._validate import as_flag, describe
 from . import ldlt
 
@@ -94,8 +95,7 @@ class Factor:
             self._ldlt = ldlt.LDLT(A)
             self.nbytes = self._ldlt.nbytes
         elif backend == "pypardiso":
-            import pypardiso
-
+            pypardiso = require("pypardiso", "fast", "backend='pypardiso'")
             self._pardiso = pypardiso.PyPardisoSolver(mtype=11)
             self._A = A.tocsr()
             self._pardiso.factorize(self._A)

@@ -9,17 +9,21 @@ factor), at about the cost of a second factorization instead of n solves.
 
 The fill-reducing ordering is approximate minimum degree (compiled; four to ten times
 cheaper to compute, with a factor of about the same size on surface meshes of up to 10⁵
-vertices) or METIS nested dissection (pymetis), whichever ``Pattern`` finds cheaper to
-factorize (see ``Pattern``); it holds the ordering and the symbolic analysis,
+vertices) or METIS nested dissection (pymetis, the ``[metis]`` extra), whichever ``Pattern``
+finds cheaper to factorize (see ``Pattern``); it holds the ordering and the symbolic analysis,
 shared by every matrix with the same sparsity pattern (the shifted matrices of one
 Laplacian).
 """
 from __future__ import annotations
 
+import importlib.util
+
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["Pattern", "LDLT", "available", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
+from .._extras import require
+
+__all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
 
 ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
 
@@ -60,13 +64,17 @@ def _blas_addresses():
 
 
 def available() -> bool:
-    """True when the compiled extension and pymetis are importable."""
+    """True when the compiled extension is importable."""
     try:
         _ext()
-        import pymetis  # noqa: F401
     except ImportError:
         return False
     return True
+
+
+def has_metis() -> bool:
+    """True when pymetis (the ``[metis]`` extra), and so nested dissection, is installed."""
+    return importlib.util.find_spec("pymetis") is not None
 
 
 def kernel_isa() -> str:
@@ -91,8 +99,11 @@ def _symmetric_csc(A) -> sp.csc_matrix:
 
 
 def nested_dissection(A) -> np.ndarray:
-    """METIS nested-dissection ordering of the graph of ``A + Aᵀ`` (perm[q] = old index)."""
-    import pymetis
+    """METIS nested-dissection ordering of the graph of ``A + Aᵀ`` (perm[q] = old index).
+
+    Needs pymetis, the ``[metis]`` extra.
+    """
+    pymetis = require("pymetis", "metis", "the nested-dissection ordering")
 
     n = A.shape[0]
     G = sp.csr_matrix((np.ones(A.nnz, dtype=np.int8), A.indices, A.indptr), shape=(n, n))
@@ -136,7 +147,8 @@ class Pattern:
     size on surface meshes below about 10⁵ vertices, far larger on volumes and large
     surfaces) or ``"auto"`` (the default): minimum degree, unless its factorization costs
     more than :data:`AUTO_WIDTH` flops per stored entry, in which case nested dissection is
-    computed too and the ordering with fewer flops kept (``self.ordering`` says which).
+    computed too (when pymetis, the ``[metis]`` extra, is installed) and the ordering with
+    fewer flops kept (``self.ordering`` says which).
     """
 
     def __init__(self, A, ordering: str = "auto"):
@@ -158,7 +170,7 @@ class Pattern:
             sym = ext.Symbolic(self.indptr, self.indices, ext.minimum_degree(self.indptr, self.indices))
             if ordering == "auto":
                 ordering = "minimum_degree"
-                if sym.flops > AUTO_WIDTH * sym.nnz_L:
+                if sym.flops > AUTO_WIDTH * sym.nnz_L and has_metis():
                     nd = ext.Symbolic(self.indptr, self.indices, nested_dissection(pat))
                     if nd.flops < sym.flops:
                         sym, ordering = nd, "nested_dissection"

@@ -94,7 +94,7 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto", keep:
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(2))
     >>> fac = sig.linalg.shifted_factor(lap, 0.1)
     >>> x = fac.solve(lap.B @ np.ones(lap.n))

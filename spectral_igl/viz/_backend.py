@@ -11,9 +11,10 @@ import sys
 
 import numpy as np
 
+from .._extras import install_hint
 from .._validate import as_cells, as_points, describe
 
-INSTALL_HINT = 'pip install "spectral_igl[viz]"'
+INSTALL_HINT = install_hint("viz")
 
 # Colour maps by meaning. Distances and other non-negative quantities: viridis, a sequential
 # map whose lightness grows uniformly from the minimum (dark blue) to the maximum (yellow):

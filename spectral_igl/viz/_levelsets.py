@@ -237,7 +237,7 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
 
     Examples
     --------
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> V, F = icosphere(2)
     >>> p = plot_levelsets((V, F), V[:, 2], filename="z.png")  # doctest: +SKIP
     """

@@ -68,7 +68,7 @@ class Viewer:
 
     Examples
     --------
-    >>> from data_generators import icosphere
+    >>> from spectral_igl.data_generators import icosphere
     >>> viewer = Viewer(icosphere(3), filter="heat", quantity="kernel", off_screen=True)  # doctest: +SKIP
     >>> viewer.on_pick(10); viewer.on_time(0.05); viewer.screenshot("v.png")  # doctest: +SKIP
     """

@@ -136,6 +136,6 @@ def midpoint_subdivide(V, F, times: int = 1):
 
 def volume_from_surface(V, F, edge_length_fac: float = 0.05, **kwargs):
     """Tetrahedral mesh of the volume inside a closed surface (fTetWild). Returns ``(V, T)``."""
-    from spectral_igl import tetrahedralize
+    from ..laplacian import tetrahedralize
 
     return tetrahedralize(V, F, edge_length_fac=edge_length_fac, **kwargs)

@@ -5,7 +5,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._check import MAX_COUNT, count, real
-from .surfaces import _grid_faces
+from .surfaces import grid_faces
 
 __all__ = ["flat_torus", "flat_torus_laplacian", "flat_torus_eigenvalues"]
 
@@ -37,7 +37,7 @@ def flat_torus(a: float = 1.0, b: float = 1.0, nu: int = 32, nv: int = 32):
         raise ValueError(f"nu * nv = {nu * nv} is more than {MAX_COUNT} vertices")
     if not (a > 0 and b > 0):
         raise ValueError(f"side lengths must be positive, got a={a}, b={b}")
-    F = _grid_faces(nu, nv, wrap_u=True, wrap_v=True)
+    F = grid_faces(nu, nv, wrap_u=True, wrap_v=True)
     iu, iv = F // nv, F % nv
 
     def length(p, q):  # shortest periodic offset between corners p and q
@@ -57,7 +57,7 @@ def flat_torus_laplacian(a: float = 1.0, b: float = 1.0, nu: int = 32, nv: int =
     """
     import igl
 
-    from spectral_igl import make_laplacian
+    from ..laplacian import make_laplacian
 
     F, l = flat_torus(a, b, nu, nv)
     n = int(nu) * int(nv)

@@ -9,7 +9,7 @@ __all__ = ["uv_sphere", "torus", "cylinder", "cylinder_eigenvalues", "box_voxels
            "box_voxel_eigenvalues", "sphere_points"]
 
 
-def _grid_faces(nu: int, nv: int, wrap_u: bool, wrap_v: bool) -> np.ndarray:
+def grid_faces(nu: int, nv: int, wrap_u: bool, wrap_v: bool) -> np.ndarray:
     """Two triangles per cell of an nu × nv vertex grid (index u * nv + v)."""
     cu = nu if wrap_u else nu - 1
     cv = nv if wrap_v else nv - 1
@@ -26,7 +26,7 @@ def uv_sphere(n_lat: int = 32, n_lon: int = 64, radius: float = 1.0):
     """Latitude-longitude sphere: ``n_lat - 1`` rings of ``n_lon`` vertices plus two poles.
 
     Strongly anisotropic triangles near the poles (a harder test than the icosphere).
-    Eigenvalues: :func:`data_generators.sphere_eigenvalues`. Returns ``(V, F)``, outward.
+    Eigenvalues: :func:`spectral_igl.data_generators.sphere_eigenvalues`. Returns ``(V, F)``, outward.
     """
     n_lat, n_lon = count(n_lat, "n_lat", 2, 10 ** 5), count(n_lon, "n_lon", 3, 10 ** 5)
     radius = real(radius, "radius", positive=True)
@@ -41,7 +41,7 @@ def uv_sphere(n_lat: int = 32, n_lon: int = 64, radius: float = 1.0):
                  np.cos(T).ravel()]
     V = np.vstack([ring, [[0, 0, 1]], [[0, 0, -1]]]) * radius
     r = n_lat - 1
-    F = _grid_faces(r, n_lon, wrap_u=False, wrap_v=True)
+    F = grid_faces(r, n_lon, wrap_u=False, wrap_v=True)
     F = F[:, [0, 2, 1]]
     north, south = r * n_lon, r * n_lon + 1
     j = np.arange(n_lon)
@@ -73,7 +73,7 @@ def torus(R: float = 1.0, r: float = 0.4, n_major: int = 64, n_minor: int = 24):
     U, W = np.meshgrid(u, v, indexing="ij")
     rho = R + r * np.cos(W)
     V = np.c_[(rho * np.cos(U)).ravel(), (rho * np.sin(U)).ravel(), (r * np.sin(W)).ravel()]
-    return V, _grid_faces(n_major, n_minor, True, True)
+    return V, grid_faces(n_major, n_minor, True, True)
 
 
 def cylinder(radius: float = 1.0, height: float = 2.0, n_theta: int = 64, n_z: int = 32):
@@ -92,7 +92,7 @@ def cylinder(radius: float = 1.0, height: float = 2.0, n_theta: int = 64, n_z: i
     z = np.linspace(0, height, n_z + 1)
     T, Z = np.meshgrid(th, z, indexing="ij")
     V = np.c_[radius * np.cos(T).ravel(), radius * np.sin(T).ravel(), Z.ravel()]
-    return V, _grid_faces(n_theta, n_z + 1, wrap_u=True, wrap_v=False)
+    return V, grid_faces(n_theta, n_z + 1, wrap_u=True, wrap_v=False)
 
 
 def cylinder_eigenvalues(k: int, radius: float = 1.0, height: float = 2.0) -> np.ndarray:
@@ -112,7 +112,7 @@ def box_voxels(shape=(16, 12, 8), size=(1.0, 0.75, 0.5)):
 
     Returns ``(mask, spacing)`` with ``spacing = size / shape`` (per axis).
     Eigenvalues: :func:`box_voxel_eigenvalues` (exact discrete) and
-    :func:`data_generators.box_eigenvalues` (continuous limit).
+    :func:`spectral_igl.data_generators.box_eigenvalues` (continuous limit).
     """
     shape = triple(shape, "shape", "count")
     size = triple(size, "size", "length")
