@@ -119,11 +119,15 @@ def test_varadhan_finite_and_in_its_band_on_real_shapes(name):
     d = varadhan_distance((V, F), s)
     assert np.all(np.isfinite(d)) and d[s] < h
     exact = igl.exact_geodesic(V, F, np.array([s]), VT=np.arange(len(V)))
-    # the documented band: median error within a few % for d in [5h, 10h), low beyond
-    sel = (exact >= 5 * h) & (exact < 10 * h)
-    assert abs(np.median(d[sel] / exact[sel] - 1)) < 0.05
-    far = exact >= 20 * h
-    assert np.all(d[far] > 0.5 * exact[far])
+    far = exact >= 5 * h
+    # the documented band: within 9% of exact beyond 5h; 5% over all vertices
+    assert np.mean(np.abs(d[far] / exact[far] - 1)) < 0.09
+    m = exact > 0
+    assert np.mean(np.abs(d[m] / exact[m] - 1)) < 0.05     # measured 0.040 (cow), 0.032 (spot)
+    # one time: the classical formula, 9.4% (spot) and 16% (cow) off at 4h^2, and it says so
+    with pytest.warns(RuntimeWarning, match=r"outside \[4, 16\]"):
+        d1 = varadhan_distance((V, F), s, t=4 * h * h)
+    assert np.mean(np.abs(d1[m] / exact[m] - 1)) > 0.08
 
 
 def test_varadhan_sphere_tets_and_components():
@@ -137,7 +141,8 @@ def test_varadhan_sphere_tets_and_components():
     sel = (exact >= 5 * h) & (exact < 10 * h)
     assert np.max(np.abs(d[sel] / exact[sel] - 1)) < 0.06
     # a tiny t forces the step count down until nothing underflows; still finite
-    assert np.all(np.isfinite(varadhan_distance((V, F), 0, t=0.05 * h * h)))
+    with pytest.warns(RuntimeWarning, match="below 4 h"):
+        assert np.all(np.isfinite(varadhan_distance((V, F), 0, t=0.05 * h * h)))
     Vt, T = box_tets((8, 6, 4))
     dt = varadhan_distance((Vt, T), 0)
     assert np.all(np.isfinite(dt))
