@@ -119,11 +119,15 @@ def test_varadhan_finite_and_in_its_band_on_real_shapes(name):
     d = varadhan_distance((V, F), s)
     assert np.all(np.isfinite(d)) and d[s] < h
     exact = igl.exact_geodesic(V, F, np.array([s]), VT=np.arange(len(V)))
-    # the documented band: median error within a few % for d in [5h, 10h), low beyond
-    sel = (exact >= 5 * h) & (exact < 10 * h)
-    assert abs(np.median(d[sel] / exact[sel] - 1)) < 0.05
-    far = exact >= 20 * h
-    assert np.all(d[far] > 0.5 * exact[far])
+    far = exact >= 5 * h
+    # the documented band: within 9% of exact beyond 5h; 5% over all vertices
+    assert np.mean(np.abs(d[far] / exact[far] - 1)) < 0.09
+    m = exact > 0
+    assert np.mean(np.abs(d[m] / exact[m] - 1)) < 0.05     # measured 0.040 (cow), 0.032 (spot)
+    # one time: the classical formula, 9.4% (spot) and 16% (cow) off at 4h^2, and it says so
+    with pytest.warns(RuntimeWarning, match=r"outside \[4, 16\]"):
+        d1 = varadhan_distance((V, F), s, t=4 * h * h)
+    assert np.mean(np.abs(d1[m] / exact[m] - 1)) > 0.08
 
 
 def test_varadhan_sphere_tets_and_components():
@@ -137,7 +141,8 @@ def test_varadhan_sphere_tets_and_components():
     sel = (exact >= 5 * h) & (exact < 10 * h)
     assert np.max(np.abs(d[sel] / exact[sel] - 1)) < 0.06
     # a tiny t forces the step count down until nothing underflows; still finite
-    assert np.all(np.isfinite(varadhan_distance((V, F), 0, t=0.05 * h * h)))
+    with pytest.warns(RuntimeWarning, match="below 4 h"):
+        assert np.all(np.isfinite(varadhan_distance((V, F), 0, t=0.05 * h * h)))
     Vt, T = box_tets((8, 6, 4))
     dt = varadhan_distance((Vt, T), 0)
     assert np.all(np.isfinite(dt))
@@ -163,3 +168,66 @@ def test_compute_each_is_compute_per_source():
         fin = np.isfinite(ref)
         assert np.array_equal(fin, np.isfinite(D[:, k]))
         assert np.abs(D[fin, k] - ref[fin]).max() <= 1e-12 * ref[fin].max()
+
+
+def _mean_rel(d, exact):
+    m = exact > 1e-9 * exact.max()
+    return float(np.mean(np.abs(d[m] - exact[m]) / exact[m]))
+
+
+def test_polygon_mesh_geodesics_against_exact():
+    """Quads: the heat method on the polygon Laplacian's fan refinement, against great
+    circles on a quad sphere and igl.exact_geodesic on horse_quad's triangulation."""
+    from data_generators.surfaces import quad_sphere
+
+    V, F = quad_sphere(12)
+    lap = sig.polygon_laplacian(V, F)
+    d = geodesic_distance(lap, 0)
+    assert d.shape == (len(V),) and d[0] == 0.0
+    assert _mean_rel(d, great_circle(V, 0)) < 0.015            # measured 0.0125 (potpourri3d 0.063)
+    hg = HeatGeodesics(lap)
+    np.testing.assert_allclose(hg.compute_each([0, 5])[:, 1], hg.compute(5), atol=1e-12)
+    from conftest import MESH_DIR
+    from spectral_igl.io import read_mesh
+
+    read_shared_mesh("horse_quad.obj")                         # skips when the meshes are absent
+    Vq, Fq = read_mesh(MESH_DIR / "horse_quad.obj", polygons=True)
+    Fq = np.asarray(Fq)
+    Ft = np.r_[Fq[:, [0, 1, 2]], Fq[:, [0, 2, 3]]]
+    Vq = Vq / np.sqrt(igl.doublearea(Vq, Ft).sum() / 2.0)
+    hq = HeatGeodesics(sig.polygon_laplacian(Vq, Fq))
+    for s in (17, 1200):
+        exact = igl.exact_geodesic(Vq, Ft, np.array([s]), VT=np.arange(len(Vq)))
+        assert _mean_rel(hq.compute(s), exact) < 0.03            # measured 0.017, 0.018
+
+
+def test_point_cloud_geodesics_sphere_and_disk():
+    """Points: great circles on the sphere, straight lines on a flat disk."""
+    from data_generators.surfaces import sphere_points
+
+    P = sphere_points(2000, seed=0)
+    d = HeatGeodesics(sig.point_cloud_laplacian(P)).compute(0)
+    exact = great_circle(P, 0)
+    assert _mean_rel(d, exact) < 0.032                         # measured 0.0281 (potpourri3d 0.0251)
+    assert np.abs(d - exact).max() < 0.1                       # measured 0.088
+    rng = np.random.default_rng(0)
+    r, a = np.sqrt(rng.random(3000)), 2 * np.pi * rng.random(3000)
+    Q = np.c_[r * np.cos(a), r * np.sin(a), np.zeros(3000)]
+    Q[0] = 0.0
+    d = HeatGeodesics(sig.point_cloud_laplacian(Q, boundary=True)).compute(0)
+    exact = np.linalg.norm(Q, axis=1)
+    assert _mean_rel(d, exact) < 0.028                         # measured 0.0239 (potpourri3d 0.0233)
+    assert np.abs(d - exact).max() < 0.04                      # measured 0.035
+
+
+def test_point_cloud_objects_and_refusals():
+    import trimesh
+
+    P = icosphere(3)[0]
+    d = geodesic_distance(trimesh.PointCloud(P), 3)
+    np.testing.assert_allclose(d, HeatGeodesics(sig.point_cloud_laplacian(P)).compute(3), atol=1e-12)
+    assert _mean_rel(d, great_circle(P, 3)) < 0.05
+    with pytest.raises(ValueError, match="step='engine'"):
+        HeatGeodesics(sig.point_cloud_laplacian(P), step="engine")
+    with pytest.raises(ValueError, match="triangle or tet"):
+        geodesic_distance(sig.point_cloud_laplacian(P), 0, method="varadhan")

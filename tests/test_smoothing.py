@@ -219,3 +219,29 @@ def test_optimal_time_on_noisy_functions_on_real_shapes(name):
     for clean in (np.sin(4 * c[:, 0]) + 3 * np.cos(3 * c[:, 1]) * c[:, 2], c[:, 0] + 0.5 * c[:, 1] * c[:, 2]):
         for noise in (0.1, 1.0):
             _decade_check(lap, clean, noise, seed=2)
+
+
+def test_optimal_shape_time_on_a_flat_mesh(tmp_path):
+    """A flat mesh has no normal noise to measure: the time comes from the risk rule of the
+    in-plane coordinates (the constant one left out), and ``spectral-igl smooth`` runs."""
+    import igl
+    from scipy.spatial import Delaunay
+
+    from spectral_igl.applications.scale import optimal_shape_time, optimal_time
+    from spectral_igl.cli import main
+
+    g = np.stack(np.meshgrid(np.linspace(0, 1, 20), np.linspace(0, 1, 20)), -1).reshape(-1, 2)
+    g += 0.01 * np.random.default_rng(0).standard_normal(g.shape)
+    F = Delaunay(g).simplices.astype(np.int64)
+    V = np.c_[g, np.zeros(len(g))]
+    lap = sig.laplacian(V, F)
+    t, sigma = optimal_shape_time(lap)
+    assert sigma == 0.0
+    expect = np.median([optimal_time(lap, V[:, j])[0] for j in range(2)])
+    assert t == expect and np.isfinite(t) and t > 0
+    path = tmp_path / "flat.obj"
+    igl.write_triangle_mesh(str(path), V, F)
+    out = tmp_path / "smoothed.obj"
+    assert main(["smooth", str(path), "--out", str(out)]) == 0
+    Vs, _ = igl.read_triangle_mesh(str(out))
+    assert np.abs(Vs[:, 2]).max() == 0.0 and 0 < np.abs(Vs - V).max() < 0.1

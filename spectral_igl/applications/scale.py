@@ -281,9 +281,7 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     seed = as_int(seed, "seed", lo=0)
     as_choice(method, "method", METHODS)
     tol = as_tol(tol, "tol")
-    Z = lap.component_basis()
-    g = f - Z @ (Z.T @ (lap.B @ f))
-    if not np.sqrt(max(g @ (lap.B @ g), 0.0)) > 1e-12 * np.sqrt(max(f @ (lap.B @ f), 0.0)):
+    if _constant_per_component(lap, f):
         raise ValueError("f is constant on every connected component (e.g. zero): diffusion does not "
                          "change it, so there is no time to choose")
     k = int(probes) if rule == "risk" else 0
@@ -403,6 +401,13 @@ def shape_noise(V, F) -> float:
     return float(1.4826 * mad / np.sqrt(1.0 + 1.0 / np.median(deg[used])))
 
 
+def _constant_per_component(lap, f) -> bool:
+    """Whether ``f`` (n,) is constant on every connected component (to 1e-12 in the B-norm)."""
+    Z = lap.component_basis()
+    g = f - Z @ (Z.T @ (lap.B @ f))
+    return not np.sqrt(max(g @ (lap.B @ g), 0.0)) > 1e-12 * np.sqrt(max(f @ (lap.B @ f), 0.0))
+
+
 def optimal_shape_time(lap, **kwargs):
     r"""Diffusion time for smoothing a noisy triangle mesh's own vertex coordinates.
 
@@ -419,6 +424,11 @@ def optimal_shape_time(lap, **kwargs):
     shapes; the mesh folds and 10 t is better, 0.61-0.66 of the error) and the coarse
     cow at 0.1 h (t/10 is better, 0.85-0.96 of the error). Against the former default
     :math:`t = h^2` it is better at 0.1 h and 0.3 h noise and worse at 1 h.
+
+    Where no normal noise is measured (:math:`\hat\sigma = 0`: a flat mesh, whose normals
+    all agree) the rule falls back to :func:`optimal_time`'s own risk rule per coordinate,
+    with the variance fitted to the residual; coordinates constant on every component
+    (the third one of a flat mesh) are left out.
 
     Parameters
     ----------
@@ -438,5 +448,10 @@ def optimal_shape_time(lap, **kwargs):
         raise ValueError(f"optimal_shape_time needs a triangle mesh Laplacian, got domain {lap.domain!r}")
     V, F = np.asarray(lap.data["V"], dtype=float), lap.data["F"]
     sigma = shape_noise(V, F)
-    ts = [optimal_time(lap, V[:, j], noise=sigma / np.sqrt(3.0), **kwargs)[0] for j in range(V.shape[1])]
+    noise = sigma / np.sqrt(3.0) if sigma > 0 else None
+    cols = [V[:, j] for j in range(V.shape[1]) if not _constant_per_component(lap, V[:, j])]
+    if not cols:
+        raise ValueError("every vertex coordinate is constant on each connected component: "
+                         "there is no shape to smooth")
+    ts = [optimal_time(lap, c, noise=noise, **kwargs)[0] for c in cols]
     return float(np.median(ts)), sigma

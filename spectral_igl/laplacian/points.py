@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from .._validate import as_int, as_mesh_arrays, as_points, as_positive, check_dense_size, describe
 from ._operator import Laplacian, make_laplacian
 
-__all__ = ["point_cloud_laplacian", "tangent_voronoi_areas"]
+__all__ = ["point_cloud_laplacian", "tangent_voronoi_areas", "local_triangles"]
 
 _METHODS = ("delaunay", "belkin", "liu")
 
@@ -438,14 +438,10 @@ def _fan_normals(nb: np.ndarray, Q: np.ndarray, dual: np.ndarray, N: np.ndarray)
     return np.where(good[:, None], S / np.where(good, norm, 1.0)[:, None], N)
 
 
-def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
-    """Cell areas, Delaunay weights and openness of the points ``rows`` among ``J`` (r, k).
-
-    The tangent plane is that of the local Delaunay fan: a first normal from the centred
-    PCA of the nearest ``_NORMAL_K`` neighbours, the fan of the Voronoi cell in that plane,
-    then the plane normal to the fan's own (3-D) normal, where the cell is clipped again.
-    The weight of a Delaunay neighbour is the cell edge over the 3-D distance.
-    """
+def _star_plane(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
+    """(nb, Q, area, dual, open) of the points ``rows`` among their neighbours ``J`` (r, k):
+    the 3-D offsets ``nb`` (r, k, 3), their coordinates ``Q`` (r, k, 2) in the plane of the
+    local Delaunay fan, and :func:`_clip_cells_dual`'s results there (see :func:`_star`)."""
     nb = P[J] - P[rows][:, None, :]
     kn = min(_NORMAL_K, J.shape[1])
     c = nb[:, :kn] - nb[:, :kn].mean(axis=1, keepdims=True)
@@ -456,6 +452,18 @@ def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_ope
     N = _fan_normals(nb, Q, dual, U[:, :, 0])
     Q = np.einsum("nki,nij->nkj", nb, _tangent_frames(nb, N))
     area, dual, is_open = _clip_cells_dual(Q, half, cut_open)
+    return nb, Q, area, dual, is_open
+
+
+def _star(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
+    """Cell areas, Delaunay weights and openness of the points ``rows`` among ``J`` (r, k).
+
+    The tangent plane is that of the local Delaunay fan: a first normal from the centred
+    PCA of the nearest ``_NORMAL_K`` neighbours, the fan of the Voronoi cell in that plane,
+    then the plane normal to the fan's own (3-D) normal, where the cell is clipped again.
+    The weight of a Delaunay neighbour is the cell edge over the 3-D distance.
+    """
+    nb, Q, area, dual, is_open = _star_plane(P, rows, d, J, cut_open)
     dist = np.linalg.norm(nb, axis=2)
     w = np.where((dual > 0) & (dist > 0), dual / np.where(dist > 0, dist, 1.0), 0.0)
     return area, w, is_open
@@ -500,3 +508,58 @@ def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     mass = np.where(np.isfinite(mass) & (mass > 0), mass, area)   # a point without a neighbour
     data = {"P": P, "method": "delaunay", "k": k, "radius": None, "boundary": boundary}
     return make_laplacian(-W, sp.diags(mass).tocsr(), domain="points", data=data)
+
+
+def local_triangles(P, k: int = 20, boundary: bool = False) -> np.ndarray:
+    r"""The triangles of every point's local Delaunay fan (the stars behind ``"delaunay"``).
+
+    For each point :math:`p_i`, its Delaunay neighbours in the tangent plane of
+    :func:`point_cloud_laplacian` (``method="delaunay"``, same ``k`` and ``boundary``),
+    taken in angular order, give the triangles :math:`(i, j_m, j_{m+1})` between
+    consecutive neighbours less than π apart. A triangle is listed once per point whose
+    star holds it (up to three times: a triangle soup, not a manifold mesh; summing
+    the cotangent stiffness of the soup with weight 1/3 gives a Laplacian of the cloud).
+
+    Parameters
+    ----------
+    P : (n, 3) float, or a mesh object (its points)
+    k : int
+        Neighbours of each star.
+    boundary : bool
+        As in :func:`point_cloud_laplacian`.
+
+    Returns
+    -------
+    (m, 3) int
+        Rows ``(i, a, b)``, the first entry the point whose star it is.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> i, j = np.meshgrid(np.arange(7.0), np.arange(7.0))     # a triangular lattice
+    >>> P = np.c_[(i + 0.5 * j).ravel(), (j * np.sqrt(3) / 2).ravel(), np.zeros(49)]
+    >>> local_triangles(P, k=12)[local_triangles(P, k=12)[:, 0] == 24].tolist()
+    [[24, 18, 25], [24, 25, 31], [24, 31, 30], [24, 30, 23], [24, 23, 17], [24, 17, 18]]
+    """
+    from scipy.spatial import cKDTree
+
+    P = as_points(as_mesh_arrays(P, name="P", need_cells=False)[0], "P", dims=(3,), min_rows=4)
+    if isinstance(k, bool) or not isinstance(k, (numbers.Integral, np.integer)) or k < 3:
+        raise ValueError(f"k must be an integer number of neighbours >= 3, got {describe(k)}")
+    n = P.shape[0]
+    k = min(int(k), n - 1)
+    rows = np.arange(n)
+    d, J = _knn(cKDTree(P), P, rows, k)
+    _, Q, _, dual, _ = _star_plane(P, rows, d, J, bool(boundary))
+    ang = np.where(dual > 0, np.arctan2(Q[..., 1], Q[..., 0]), np.inf)
+    order = np.argsort(ang, axis=1)
+    cnt = (dual > 0).sum(axis=1)
+    Js = np.take_along_axis(J, order, axis=1)
+    angs = np.take_along_axis(ang, order, axis=1)
+    out = []
+    for m in range(k):
+        b = np.where(m + 1 < cnt, m + 1, 0)
+        gap = np.where(b == 0, angs[rows, b] + 2.0 * np.pi - angs[:, m], angs[rows, b] - angs[:, m])
+        ok = (m < cnt) & (cnt >= 2) & (gap > 0) & (gap < np.pi)
+        out.append(np.c_[rows[ok], Js[ok, m], Js[rows, b][ok]])
+    return np.concatenate(out).astype(np.int64)

@@ -1,0 +1,89 @@
+"""Heat-method geodesics on polygon meshes and point clouds, beside potpourri3d.
+
+Usage::
+
+    python benchmarks/geodesic_domains.py [--sources 5]
+
+Mean relative error |d - d*| / d* over all vertices (sources excluded), averaged over random
+sources, at unit area. d*: ``igl.exact_geodesic`` on the triangle mesh the polygons or points
+come from (horse_quad's quads split along one diagonal; the vertices of real meshes as point
+clouds), the great-circle distance for points on the unit sphere. Peers on the same input:
+potpourri3d's ``PolygonMeshHeatSolver`` and ``MeshHeatMethodDistanceSolver`` (on the split
+quads), and its ``PointCloudHeatSolver``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import igl  # noqa: E402
+
+import spectral_igl as sig  # noqa: E402
+from data_generators.surfaces import sphere_points  # noqa: E402
+from spectral_igl.io import read_mesh  # noqa: E402
+
+MESHES = ROOT.parent / "shared" / "data" / "meshes"
+
+
+def rel_error(d, exact):
+    m = exact > 1e-9 * exact.max()
+    return float(np.mean(np.abs(d[m] - exact[m]) / exact[m]))
+
+
+def mean_error(fn, sources, exact):
+    return np.mean([rel_error(fn(s), e) for s, e in zip(sources, exact)])
+
+
+def polygons(rng, n_sources):
+    import potpourri3d as pp3d
+
+    V, F = read_mesh(MESHES / "horse_quad.obj", polygons=True)
+    F = np.asarray(F)
+    Ft = np.r_[F[:, [0, 1, 2]], F[:, [0, 2, 3]]]
+    V = V / np.sqrt(igl.doublearea(V, Ft).sum() / 2.0)
+    src = rng.choice(len(V), n_sources, replace=False)
+    exact = [igl.exact_geodesic(V, Ft, np.array([s]), VT=np.arange(len(V))) for s in src]
+    ours = sig.HeatGeodesics(sig.polygon_laplacian(V, F))
+    poly = pp3d.PolygonMeshHeatSolver(V, F)
+    tri = pp3d.MeshHeatMethodDistanceSolver(V, Ft)
+    print(f"horse_quad (n={len(V)}): ours {mean_error(ours.compute, src, exact):.4f}  "
+          f"pp3d polygon {mean_error(lambda s: poly.compute_distance(np.array([s])), src, exact):.4f}  "
+          f"pp3d on the split quads {mean_error(tri.compute_distance, src, exact):.4f}")
+
+
+def points(rng, n_sources):
+    import potpourri3d as pp3d
+
+    cases = [("unit sphere, 4000 random points", sphere_points(4000, seed=1), None)]
+    for name in ("spot.obj", "cow.obj", "homer.obj", "rocker-arm.obj"):
+        V, F = read_mesh(MESHES / name)
+        cases.append((f"{name} vertices", V / np.sqrt(igl.doublearea(V, F).sum() / 2.0), F))
+    for name, P, F in cases:
+        src = rng.choice(len(P), n_sources, replace=False)
+        if F is None:
+            exact = [np.arccos(np.clip(P @ P[s], -1.0, 1.0)) for s in src]
+        else:
+            exact = [igl.exact_geodesic(P, F, np.array([s]), VT=np.arange(len(P))) for s in src]
+        ours = sig.HeatGeodesics(sig.point_cloud_laplacian(P))
+        peer = pp3d.PointCloudHeatSolver(P)
+        print(f"{name} (n={len(P)}): ours {mean_error(ours.compute, src, exact):.4f}  "
+              f"pp3d {mean_error(peer.compute_distance, src, exact):.4f}")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sources", type=int, default=5)
+    args = p.parse_args(argv)
+    rng = np.random.default_rng(0)
+    polygons(rng, args.sources)
+    points(rng, args.sources)
+
+
+if __name__ == "__main__":
+    main()
