@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._extras import require
+from .._extras import install_hint, require
 from .._validate import as_flag, describe
 from . import ldlt
 
@@ -43,19 +43,19 @@ def available_backends() -> list[str]:
 
 
 #: how to install the backends that are optional dependencies
-INSTALL = {"cholespy": "pip install cholespy", "pypardiso": "pip install pypardiso (or spectral-igl[fast])"}
+INSTALL = {"cholespy": "pip install cholespy", "pypardiso": install_hint("fast")}
 
 
 def check_backend(backend) -> str:
     """Validate a sparse-solver backend name against those importable here.
 
-    A known backend that is not installed is refused with the command that installs it,
-    before any work.
+    A known backend that is not installed is refused, before any work, with an ImportError of
+    one line naming the command that installs it (a missing dependency, as for every extra).
     """
     valid = ("auto",) + tuple(available_backends())
     if isinstance(backend, str) and backend in BACKENDS and backend not in valid:
-        raise ValueError(f"backend {backend!r} is not installed here: {INSTALL.get(backend, '')}; "
-                         f"available: {valid}")
+        raise ImportError(f"backend {backend!r} is not installed here (available: {', '.join(valid)}): "
+                          f"{INSTALL.get(backend, '')}")
     if not isinstance(backend, str) or backend not in valid:
         raise ValueError(f"backend must be one of {valid}, got {describe(backend)}")
     return backend
