@@ -30,11 +30,13 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
+from ..linalg.threads import serial_blas
 from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2_ellipse, filter_second,
                      interpolated_d2, inv_bnorm_upper, sup_error)
 
 
 # ----------------------------------------------------------------------------- CF for exp
+@serial_blas
 def lawson_lstsq(A, y, iterations: int):
     """Least squares of ``A c ≈ y`` reweighted towards the minimax solution (Lawson).
 
@@ -56,6 +58,7 @@ def lawson_lstsq(A, y, iterations: int):
 
 
 @lru_cache(maxsize=None)
+@serial_blas
 def cf_exp(r: int):
     r"""Near-best rational approximation of :math:`e^{-x}` on :math:`[0, \infty)`, type (r, r).
 
@@ -322,6 +325,7 @@ def fit_residues(x, y, poles, real: bool, lawson: int = 0):
     return complex(sol[0]), sol[1:], up
 
 
+@serial_blas
 def aaa_fit(fn, a: float, b: float, rtol: float = 1e-13, max_terms: int = 100, is_complex=False):
     """AAA rational fit of ``fn`` on [a, b], in partial fractions (None when unusable).
 

@@ -16,6 +16,7 @@ from ..progress import progress_bar
 from . import ldlt
 from .factor import check_backend, factorize
 from .solves import ldlt_factor
+from .threads import serial_blas
 
 __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
            "negative_inertia", "eigenvalue_bracket", "gap_lower_bound"]
@@ -186,6 +187,7 @@ def _certified_pairs(lap, k, tol, backend, progress):
     return vals, X, info
 
 
+@serial_blas
 def _lanczos(lap, fac, s, Z, W, m, tol, seed, bar):
     r"""(n, m) the m pairs nearest -s of the pencil on the B-orthogonal complement of [Z, W]
     (Z sparse, W dense, both B-orthonormal), by shift-invert Lanczos with the factor of L + sB."""
