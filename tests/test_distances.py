@@ -218,14 +218,18 @@ def test_survey_mexican_hat_distance_against_dense(lap_torus):
                          ids=["diffusion", "mexican_hat"])
 def test_one_to_all_selinv_streams_its_factors(name, dist, fn, singular):
     """Through the selected inverse, the column and the diagonal's check come from the
-    diagonal's single pass over the poles: the complex factorizations are not kept, and a
-    second source (factorizing again) agrees with the dense truth just as well."""
-    lap = sig.laplacian(*torus(18, 9, jitter=0.3, seed=11))
-    for s in (13, 90):
-        ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, s, singular), 0))
-        d, info = dist(lap, s, diagonal="selinv", return_info=True)
-        assert info["method"] == "selinv"
-        assert np.abs(d - ref).max() <= 1e-7 * ref.max()
-        if s == 13:
-            kept = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
-            assert kept == []
+    diagonal's single pass over the poles: with no room in the factor budget the complex
+    factorizations are not kept (with room they are), and a second source (factorizing again,
+    or not) agrees with the dense truth just as well."""
+    for budget in (0, None):
+        lap = sig.laplacian(*torus(18, 9, jitter=0.3, seed=11))
+        lap.cache.factor_budget = budget
+        for s in (13, 90):
+            ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, s, singular), 0))
+            d, info = dist(lap, s, diagonal="selinv", return_info=True)
+            assert info["method"] == "selinv"
+            assert np.abs(d - ref).max() <= 1e-7 * ref.max()
+            if s == 13:
+                kept = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
+                assert bool(kept) == (budget is None)
+
