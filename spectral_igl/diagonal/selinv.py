@@ -91,10 +91,14 @@ class SelinvKernel:
             if not certifiable(filt):
                 self.bound_kind = "estimate"
         else:
-            if filt.kind == "heat":
-                # |error_i| <= eps (B^-1)_ii and G_ii >= 1/V_c (the constant mode): this
-                # eps makes the error at most tol G_ii at every vertex
-                tol = max(tol * float(np.min(1.0 / (lap.component_volume() * self.minv))), 1e-15)
+            g0 = abs(filt.at_zero())
+            if g0 > 0:
+                # |error_i| <= eps (B^-1)_ii and G_ii >= phi(0)/V_c (the constant mode; every
+                # term of G_ii is >= 0 for phi = |psi|^2): this eps, relative to max |phi| as
+                # the fits take it, makes the error at most tol G_ii at every vertex
+                top = float(np.max(np.abs(filt(np.geomspace(max(b, 1e-300) * 1e-12, b, 200)))))
+                rel = g0 / max(top, g0)
+                tol = max(tol * rel * float(np.min(1.0 / (lap.component_volume() * self.minv))), 1e-15)
             try:
                 plan = RationalPlan(lap, filt, a, b, tol)
             except (ValueError, RuntimeError) as exc:
