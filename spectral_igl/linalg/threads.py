@@ -6,13 +6,15 @@ vectors. With OpenBLAS's default (one thread per core), such calls spin on every
 when another process keeps one core busy they wait for it: a heat column on a 43k-vertex
 mesh took 21.9 s instead of 2.0 s with one core busy on a 2-core machine (one thread: the
 same 2.0 s on a quiet machine). Those sections therefore run with at most
-:data:`MAX_BLAS_THREADS` threads (through threadpoolctl, when it is installed); the limit is
+:data:`MAX_BLAS_THREADS` threads (through threadpoolctl); the limit is
 lifted on leaving them, so the caller's own BLAS work keeps the caller's setting.
 """
 from __future__ import annotations
 
 import functools
 from contextlib import contextmanager
+
+from threadpoolctl import ThreadpoolController
 
 __all__ = ["MAX_BLAS_THREADS", "blas_threads", "serial_blas"]
 
@@ -27,9 +29,8 @@ def _get_controller():
     """A threadpoolctl controller of the BLAS libraries loaded (built once), or None."""
     if not _controller:
         try:
-            from threadpoolctl import ThreadpoolController
             _controller.append(ThreadpoolController())
-        except Exception:          # threadpoolctl missing or unable to inspect the libraries
+        except Exception:          # pragma: no cover - unable to inspect the loaded libraries
             _controller.append(None)
     return _controller[0]
 
