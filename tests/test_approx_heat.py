@@ -42,3 +42,27 @@ def test_heat_low_order_bound_holds(method, opts, rng):
         assert err <= op.error_bound + slack, (t, err, op.error_bound)
 
 
+
+
+@pytest.mark.parametrize("name", ["sphere", "two_spheres"])
+def test_large_t_needs_no_lanczos_for_its_gap(name, monkeypatch, rng):
+    """At large t a decaying heat filter is split at a lower bound of lambda_{c+1} proved by one
+    inertia count, not by lambda_min_positive's Lanczos run: dropped (no solve) where e^(-ta) is
+    below tol, else any proved a > 0 for the Caratheodory-Fejer fit; the bound covers the error."""
+    import spectral_igl.approx.operator as operator_mod
+
+    lap0, ev, X = shape(name)
+    c = lap0.n_components
+    f = rng.standard_normal(lap0.n)
+    # (the meshes are too coarse for t * lambda_max > LARGE_T at such t: the threshold is lowered)
+    for large_t, t, dropped in [(100.0, 30.0 / ev[c], True), (1.0, 0.3 / ev[c], False)]:
+        monkeypatch.setattr(operator_mod, "LARGE_T", large_t)
+        lap = SHAPES[name]()                                     # a cold cache
+        assert t * sig.lambda_max(lap) > large_t
+        op, err, slack = check(lap, ev, X, filters.heat(t), "rational", f)
+        assert ("bound", "lambda_min_positive") not in lap.cache
+        assert 0 < op.a <= ev[c], (op.a, ev[c])
+        assert isinstance(op.plan, operator_mod.ZeroPlan) == dropped
+        assert op.bound_kind == "proof"
+        assert err <= op.error_bound + slack, (t, err, op.error_bound)
+        assert op.error_bound <= 1e-8 * bnorm(lap, f) + 10 * slack

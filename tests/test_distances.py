@@ -218,14 +218,34 @@ def test_survey_mexican_hat_distance_against_dense(lap_torus):
                          ids=["diffusion", "mexican_hat"])
 def test_one_to_all_selinv_streams_its_factors(name, dist, fn, singular):
     """Through the selected inverse, the column and the diagonal's check come from the
-    diagonal's single pass over the poles: the complex factorizations are not kept, and a
-    second source (factorizing again) agrees with the dense truth just as well."""
-    lap = sig.laplacian(*torus(18, 9, jitter=0.3, seed=11))
-    for s in (13, 90):
-        ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, s, singular), 0))
-        d, info = dist(lap, s, diagonal="selinv", return_info=True)
-        assert info["method"] == "selinv"
-        assert np.abs(d - ref).max() <= 1e-7 * ref.max()
-        if s == 13:
-            kept = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
-            assert kept == []
+    diagonal's single pass over the poles: with no room in the factor budget the complex
+    factorizations are not kept (with room they are), and a second source (factorizing again,
+    or not) agrees with the dense truth just as well."""
+    for budget in (0, None):
+        lap = sig.laplacian(*torus(18, 9, jitter=0.3, seed=11))
+        lap.cache.factor_budget = budget
+        for s in (13, 90):
+            ref = np.sqrt(np.maximum(dense_sq_distances(lap, fn, s, singular), 0))
+            d, info = dist(lap, s, diagonal="selinv", return_info=True)
+            assert info["method"] == "selinv"
+            assert np.abs(d - ref).max() <= 1e-7 * ref.max()
+            if s == 13:
+                kept = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
+                assert bool(kept) == (budget is None)
+
+
+@pytest.mark.parametrize("tol", [1e-6, 1e-8, 1e-10])
+def test_user_filter_distance_meets_tol_relative_to_the_distance(tol):
+    """A user filter phi = 1/(1+s)^2: the rational fit of |phi|^2 = (1+s)^-4 has a pole of order
+    4, which simple AAA poles picture as a cluster whose residues lose 1e-7 to rounding; the
+    cluster is spread into a ring and the fit's target is set relative to the diagonal, so the
+    one-to-all distance is within tol of the largest distance (dense eigh as the truth)."""
+    lap = sig.laplacian(*icosphere(3))
+    ev, X = sig.dense_eigs(lap)
+    phi = lambda s: 1.0 / (1.0 + s) ** 2  # noqa: E731
+    d, info = sig.spectral_distance(lap, F.Filter(phi), 0, tol=tol, return_info=True)
+    ref = np.sqrt(np.maximum(((phi(ev) ** 2)[None, :] * (X - X[0]) ** 2).sum(axis=1), 0.0))
+    err = np.abs(d - ref)
+    assert err.max() <= tol * ref.max(), (err.max(), ref.max())
+    assert np.all(err <= info["abs_error"] + 1e-15)
+    assert info["bound_kind"] == "estimate"          # a user filter's fit cannot be proved

@@ -74,18 +74,40 @@ def test_filters_are_values():
     assert len({filters.heat(1.0), filters.heat(1.0), filters.biharmonic()}) == 2
 
 
-def test_second_source_reuses_the_precomputation():
-    """Above the dense limit a one-call distance holds one factorization at a time (none is
-    kept) and a second source reuses its diagonal; ``OneToAll`` keeps the factorizations, so
-    its second source needs no new one."""
-    lap = sig.laplacian(*torus(n_major=80, n_minor=50))   # 4,000 vertices > EXACT_MAX
-    assert lap.n > sig.diagonal.EXACT_MAX
-    d0 = sig.diffusion_distance(lap, 1e-2, 0)
-    assert not [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
-    diagonals = lap.cache.keys("diagonal")
-    d7 = sig.diffusion_distance(lap, 1e-2, 7)
-    assert lap.cache.keys("diagonal") == diagonals        # no new selected inversion
-    assert abs(d0[7] - d7[0]) <= 1e-7 * d0[7]
+def test_second_source_reuses_the_precomputation(monkeypatch):
+    """Above the dense limit a one-call distance keeps its poles' factorizations when they fit
+    in the cache's factor budget: a second source factorizes nothing and reuses the diagonal.
+    With no room it holds one factorization at a time (none is kept), and a second source
+    factorizes the poles again but reuses the diagonal. ``OneToAll`` keeps the factorizations,
+    so its second source needs no new one."""
+    from spectral_igl.linalg import ldlt
+
+    made = []
+    init = ldlt.LDLT.__init__
+
+    def counted(self, *args, **kwargs):
+        made.append(1)
+        init(self, *args, **kwargs)
+
+    monkeypatch.setattr(ldlt.LDLT, "__init__", counted)
+    d0 = None
+    for budget in (None, 0):
+        lap = sig.laplacian(*torus(n_major=80, n_minor=50))   # 4,000 vertices > EXACT_MAX
+        assert lap.n > sig.diagonal.EXACT_MAX
+        lap.cache.factor_budget = budget
+        first = sig.diffusion_distance(lap, 1e-2, 0)
+        d0 = first if d0 is None else d0
+        poles = [k for k in lap.cache.keys("factor") if isinstance(k[2], complex)]
+        assert bool(poles) == (budget is None)
+        diagonals = lap.cache.keys("diagonal")
+        del made[:]
+        d7 = sig.diffusion_distance(lap, 1e-2, 7)
+        assert lap.cache.keys("diagonal") == diagonals        # no new selected inversion
+        # kept: no factorization at all; dropped: one per pole (each conjugate pair is one)
+        kern = sig.diagonal.selinv_kernel(lap, filters.heat(1e-2).square, 1e-8)
+        assert len(made) == (0 if budget is None else len(kern.pf.terms)), (budget, len(made))
+        assert abs(first[7] - d7[0]) <= 1e-7 * first[7]
+        assert abs(first[7] - d0[7]) <= 1e-12 * d0[7]
     lap2 = sig.laplacian(*torus(n_major=80, n_minor=50))
     solver = sig.OneToAll(lap2, filters.heat(5e-3))
     factors = set(lap2.cache.keys("factor"))

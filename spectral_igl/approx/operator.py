@@ -12,7 +12,7 @@ from ..accuracy import warn_missed
 from .._validate import as_positive, as_signal, as_tol, check_dense_size, check_spectral_function
 from ..filters import as_filter
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
-from ..linalg import check_backend, lambda_min_positive, lambda_min_positive_kind
+from ..linalg import check_backend, gap_lower_bound, lambda_min_positive, lambda_min_positive_kind
 from .choice import HEAT_ONLY, LARGE_T, METHODS, PLANS, check_engine_options, choose_method
 from .common import (EPS, abs_bnorm, abs_mass_apply, bnorm, filter_sup, inv_bnorm_lower, inv_bnorm_upper,
                      mass_rounding, nonnegative_mass, projection_rounding)
@@ -108,7 +108,11 @@ class SpectralOperator(spla.LinearOperator):
         self.split = method not in ("dense", "eigen")
         t = filt.params.get("t") if filt.kind in ("heat", "mexican_hat", "mexican_hat_survey") else None
         decays = self.split and t is not None and t * self.lambda_max > LARGE_T
-        self.a = lambda_min_positive(lap) if (filt.singular or decays) else 0.0
+        self.a, a_kind = 0.0, "unused"
+        if decays and not filt.singular:
+            self.a, a_kind = self._decay_floor(t)
+        elif filt.singular:
+            self.a, a_kind = lambda_min_positive(lap), lambda_min_positive_kind(lap)
         if self.a >= self.lambda_max:          # only isolated vertices, or a 1-edge mesh
             self.a = 0.5 * self.lambda_max
         kwargs = dict(options)
@@ -129,12 +133,34 @@ class SpectralOperator(spla.LinearOperator):
                              f"[{self.a:.3g}, {self.lambda_max:.3g}] (t * lambda_max too large for it); "
                              "use method='rational', 'krylov' or 'chebyshev', or a smaller t")
         self._enclosure = {"lambda_max": lambda_max_kind(lap),
-                           "lambda_min_positive": (lambda_min_positive_kind(lap) if self.a > 0 else "unused")}
+                           "lambda_min_positive": a_kind if self.a > 0 else "unused"}
         self.n_solves = getattr(self.plan, "n_solves", None)
         self.error_bound = None
         pf = getattr(self.plan, "pf", None)
         log.debug("%s: %s solves per column, degree %s, poles %s", self, self.n_solves,
                   getattr(self.plan, "m", None), None if pf is None else [z for _, z, _ in pf.terms])
+
+    def _decay_floor(self, t):
+        r"""``(a, kind)``: the lower end of the interval a decaying filter is approximated on at
+        large t, a proved lower bound of :math:`\lambda_{c+1}` found cheaply where that suffices.
+
+        Heat drops its remainder (:class:`ZeroPlan`) once :math:`e^{-ta} \le` tol/2, i.e. for
+        any proved :math:`a \ge \ln(4/\mathrm{tol})/t` (a factor 2 to spare): one inertia count there
+        (:func:`~spectral_igl.linalg.gap_lower_bound`) replaces the Lanczos run and counts of
+        :func:`~spectral_igl.linalg.lambda_min_positive`. Where the remainder stays, the
+        Carathéodory--Fejér fit of the ``"rational"`` method does not depend on a (its error is
+        that of :math:`e^{-x}` on :math:`[0, \infty)`), so any proved a > 0 will do. Else, and
+        when no count proves a bound, :func:`~spectral_igl.linalg.lambda_min_positive`.
+        """
+        lap, filt = self.lap, self.filter
+        if filt.kind == "heat" and t > 0:
+            # e^(-ta) at tol/4: room for the slack of the certified maximum ZeroPlan takes
+            want = np.log(4.0 / self._plan_tol()) / t
+            if want < self.lambda_max:
+                a = gap_lower_bound(lap, want, any_bound=self.method == "rational")
+                if a is not None:
+                    return a, "proof"
+        return lambda_min_positive(lap), lambda_min_positive_kind(lap)
 
     @property
     def bound_parts(self) -> dict:

@@ -30,11 +30,13 @@ import scipy.linalg as sla
 
 from ..filters import commute_time
 from ..linalg import mass_solve, pseudo_solve, shifted_factor
+from ..linalg.threads import serial_blas
 from .common import (EPS, bnorm, certified_sup, ellipse_box, filter_d2_ellipse, filter_second,
                      interpolated_d2, inv_bnorm_upper, sup_error)
 
 
 # ----------------------------------------------------------------------------- CF for exp
+@serial_blas
 def lawson_lstsq(A, y, iterations: int):
     """Least squares of ``A c ≈ y`` reweighted towards the minimax solution (Lawson).
 
@@ -56,6 +58,7 @@ def lawson_lstsq(A, y, iterations: int):
 
 
 @lru_cache(maxsize=None)
+@serial_blas
 def cf_exp(r: int):
     r"""Near-best rational approximation of :math:`e^{-x}` on :math:`[0, \infty)`, type (r, r).
 
@@ -322,6 +325,7 @@ def fit_residues(x, y, poles, real: bool, lawson: int = 0):
     return complex(sol[0]), sol[1:], up
 
 
+@serial_blas
 def aaa_fit(fn, a: float, b: float, rtol: float = 1e-13, max_terms: int = 100, is_complex=False):
     """AAA rational fit of ``fn`` on [a, b], in partial fractions (None when unusable).
 
@@ -351,12 +355,66 @@ def aaa_fit(fn, a: float, b: float, rtol: float = 1e-13, max_terms: int = 100, i
     if np.any(on):
         return None
     real = not is_complex
-    if real:  # symmetrise: keep upper poles and real ones
-        tol_im = 1e-10 * np.maximum(1.0, np.abs(poles))
-        poles = np.concatenate([poles[poles.imag > tol_im], poles[np.abs(poles.imag) <= tol_im].real + 0j])
     xf = np.unique(np.concatenate([x, np.linspace(a, b, 4000), np.geomspace(lo, b, 4000)]))
-    alpha0, coef, pol = fit_residues(xf, fn(xf), poles, real)
-    return PartialFractions(alpha0, coef, pol, sigma=1.0)
+    yf = fn(xf)
+    best = None
+    for pol in (poles, spread_clusters(poles, a, b, rtol)):
+        if pol is None:
+            continue
+        if real:  # symmetrise: keep upper poles and real ones
+            tol_im = 1e-10 * np.maximum(1.0, np.abs(pol))
+            pol = np.concatenate([pol[pol.imag > tol_im], pol[np.abs(pol.imag) <= tol_im].real + 0j])
+        pf = PartialFractions(*fit_residues(xf, yf, pol, real), sigma=1.0)
+        err = float(np.max(np.abs(pf(xf) - yf)))
+        if best is None or err < best[0]:
+            best = (err, pf)
+        if err <= 10.0 * rtol * max(scale, 1e-300):
+            break
+    return best[1]
+
+
+#: poles of an AAA fit closer to each other than this fraction of their distance to the
+#: interval form a cluster (the fit's picture of a multiple pole)
+CLUSTER_GAP = 0.05
+
+
+def spread_clusters(poles, a: float, b: float, rtol: float):
+    r"""The poles with each cluster replaced by a ring of well-separated ones, or None when
+    there is no cluster.
+
+    A pole of order k of the function is fitted by k simple poles a distance
+    :math:`\sim \varepsilon^{1/k}` apart, whose residues are :math:`\varepsilon^{-(k-1)/k}` times the
+    function: their partial fractions lose that much to rounding (a fit of
+    :math:`(1+s)^{-4}` then stalls at 1e-7). m poles evenly spaced on a circle of radius R
+    around the cluster's centre c represent every singularity inside the circle within
+    :math:`(R/|s-c|)^m + (\rho/R)^m` (the trapezoid rule on the circle; ρ the cluster's
+    radius), with residues of the function's size: R is a third of the distance to
+    [a, b], m the even number making :math:`3^{-m}` below ``rtol``.
+    """
+    poles = np.asarray(poles, dtype=complex)
+    if poles.size < 2:
+        return None
+    dist = np.abs(poles - np.clip(poles.real, a, b))
+    gap = np.abs(poles[:, None] - poles[None, :]) < CLUSTER_GAP * np.minimum(dist[:, None], dist[None, :])
+    label = np.arange(poles.size)
+    for _ in range(poles.size):                     # single linkage: connected components
+        new = np.min(np.where(gap, label[None, :], poles.size), axis=1)
+        if np.array_equal(new, label):
+            break
+        label = new
+    out, spread = [], False
+    m = int(2 * np.ceil(np.log(max(rtol, 1e-16)) / np.log(1.0 / 3.0) / 2.0))
+    for lab in np.unique(label):
+        group = poles[label == lab]
+        c = group.mean()
+        radius = np.max(np.abs(group - c))
+        R = abs(c - np.clip(c.real, a, b)) / 3.0
+        if group.size < 2 or not 3.0 * radius < R:
+            out.append(group)
+            continue
+        spread = True
+        out.append(c + R * np.exp(1j * np.pi * (2 * np.arange(m) + 1) / m))
+    return np.concatenate(out) if spread else None
 
 
 def rounding(pf: PartialFractions, a: float, b: float, lam_max: float) -> float:

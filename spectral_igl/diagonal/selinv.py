@@ -8,6 +8,7 @@ EPS = np.finfo(float).eps
 
 from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, rounding
 from ..laplacian import lambda_max, lambda_max_kind
+from ..laplacian.cache import SLOTS
 from ..linalg import (
     grounded_factor,
     inverse_mass_diagonal,
@@ -15,6 +16,7 @@ from ..linalg import (
     lambda_min_positive_kind,
     ldlt,
     ldlt_factor,
+    ldlt_pattern,
     mass_solve,
     pseudo_solve,
     shifted_factor,
@@ -89,10 +91,14 @@ class SelinvKernel:
             if not certifiable(filt):
                 self.bound_kind = "estimate"
         else:
-            if filt.kind == "heat":
-                # |error_i| <= eps (B^-1)_ii and G_ii >= 1/V_c (the constant mode): this
-                # eps makes the error at most tol G_ii at every vertex
-                tol = max(tol * float(np.min(1.0 / (lap.component_volume() * self.minv))), 1e-15)
+            g0 = abs(filt.at_zero())
+            if g0 > 0:
+                # |error_i| <= eps (B^-1)_ii and G_ii >= phi(0)/V_c (the constant mode; every
+                # term of G_ii is >= 0 for phi = |psi|^2): this eps, relative to max |phi| as
+                # the fits take it, makes the error at most tol G_ii at every vertex
+                top = float(np.max(np.abs(filt(np.geomspace(max(b, 1e-300) * 1e-12, b, 200)))))
+                rel = g0 / max(top, g0)
+                tol = max(tol * rel * float(np.min(1.0 / (lap.component_volume() * self.minv))), 1e-15)
             try:
                 plan = RationalPlan(lap, filt, a, b, tol)
             except (ValueError, RuntimeError) as exc:
@@ -208,11 +214,24 @@ class SelinvKernel:
     # ----------------------------------------------------------------- public
     def prime(self, E) -> None:
         """Have the diagonal's pass (if still to come) also compute R E: each pole's factor
-        serves its selected inversion and its solves and is then dropped, so the pass holds
-        one factorization at a time (a one-to-all distance needs the diagonal and a column,
-        the diagonal's check a few columns)."""
+        serves its selected inversion and its solves (a one-to-all distance needs the
+        diagonal and a column, the diagonal's check a few columns). The factors are kept in
+        ``lap.cache`` for the columns of later calls (a second source) when all of them fit in
+        the cache's factor budget (:meth:`factors_fit`), else each is dropped
+        after use, so the pass holds one factorization at a time."""
         if self._diag is None and not (self.circle or self.power):
             self._pending.append(np.array(E, dtype=float, copy=True))
+            self.keep_factors = self.keep_factors or self.factors_fit()
+
+    def factors_fit(self) -> bool:
+        """Whether the factorizations of every pole fit in the factor budget of ``lap.cache``
+        (and its entry limit), by the size of the symbolic analysis; older factorizations
+        make room, least recently used first."""
+        if self.circle or self.power:
+            return True
+        terms = self.pf.terms
+        per_pole = ldlt_pattern(self.lap).nnz_L * np.dtype(np.complex128).itemsize
+        return len(terms) * per_pole <= self.lap.cache.factor_budget and len(terms) <= SLOTS["factor"][1]
 
     def columns(self, E):
         """R E for E of shape (n, k)."""

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from .._validate import as_flag, as_int, as_tol, check_dense_size, describe
+from .._validate import as_flag, as_int, as_positive, as_tol, check_dense_size, describe
 from ..accuracy import weakest
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
 from ..laplacian.units import dimension
@@ -16,9 +16,10 @@ from ..progress import progress_bar
 from . import ldlt
 from .factor import check_backend, factorize
 from .solves import ldlt_factor
+from .threads import serial_blas
 
 __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
-           "negative_inertia", "eigenvalue_bracket"]
+           "negative_inertia", "eigenvalue_bracket", "gap_lower_bound"]
 
 
 #: at most this many Lanczos runs per call of :func:`eigs`: the first, then searches of the
@@ -186,6 +187,7 @@ def _certified_pairs(lap, k, tol, backend, progress):
     return vals, X, info
 
 
+@serial_blas
 def _lanczos(lap, fac, s, Z, W, m, tol, seed, bar):
     r"""(n, m) the m pairs nearest -s of the pencil on the B-orthogonal complement of [Z, W]
     (Z sparse, W dense, both B-orthonormal), by shift-invert Lanczos with the factor of L + sB."""
@@ -451,6 +453,63 @@ def _lambda_min_positive(lap):
         return max(0.95 * est, 1e-300), "estimate"
 
     return lap.cache.fetch("bound", "lambda_min_positive", build)
+
+
+#: inertia counts :func:`gap_lower_bound` takes below its first shift before it gives up
+GAP_TRIALS = 3
+
+
+def gap_lower_bound(lap: Laplacian, mu: float, any_bound: bool = False):
+    r"""A proved lower bound of :math:`\lambda_{c+1}` of about ``mu``, from one inertia count,
+    without the Lanczos run of :func:`lambda_min_positive`; or ``None``.
+
+    When an :math:`LDL^\top` factorization of :math:`L - \mu B` has exactly c negative pivots
+    (c = number of connected components), exactly c eigenvalues -- the zeros of ker L -- lie
+    below :math:`\mu` (Sylvester's law of inertia), so :math:`\lambda_{c+1} \ge \mu` less the
+    count's backward error. One factorization, about a sixth of a Cholesky factorization's
+    cost on a 43k-vertex mesh, against several for :func:`lambda_min_positive`.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    mu : float
+        The bound wanted (> 0).
+    any_bound : bool
+        When the count at ``mu`` finds a positive eigenvalue below it, try shifts below a
+        quarter of ``min(mu, Weyl's law for lambda_{c+1})``, 8 times lower each
+        (:data:`GAP_TRIALS` of them), for any proved bound at all.
+
+    Returns
+    -------
+    float or None
+        The certified :func:`lambda_min_positive` when it is already cached (the best bound
+        known), else the first shift the counts prove, else ``None``. Every value returned
+        is a proof.
+    """
+    lap = as_laplacian(lap)
+    mu = as_positive(mu, "mu")
+    known = lap.cache.get("bound", "lambda_min_positive")
+    if known is not None and known[1] == "proof":
+        return known[0]
+    if lap.n <= lap.n_components:
+        return lambda_min_positive(lap)
+    shifts = [mu]
+    if any_bound:
+        first = 0.25 * min(mu, _weyl(lap, 1))
+        shifts += [first * 8.0 ** -i for i in range(GAP_TRIALS)]
+    for sigma in shifts:
+        got = lap.cache.fetch("bound", ("gap_lower_bound", sigma), lambda: _count_gap(lap, sigma))
+        if got is not None:
+            return got
+    return None
+
+
+def _count_gap(lap, sigma):
+    """``sigma`` less the count's backward error when exactly c eigenvalues lie below it, else None."""
+    count, backward = _inertia(lap, sigma)
+    if count != lap.n_components or backward is None or not backward < sigma:
+        return None
+    return float(sigma - backward)
 
 
 #: relative width to which :func:`eigenvalue_bracket` narrows its bracket by default

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._extras import require
+from .threads import serial_blas
 
 __all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
 
@@ -224,6 +225,7 @@ def _one_nonzero_per_column(B):
 class LDLT:
     """``A = P L D Lᵀ Pᵀ`` of a sparse symmetric matrix (real or complex symmetric)."""
 
+    @serial_blas
     def __init__(self, A, pattern: Pattern | None = None):
         A = _symmetric_csc(A)
         self.pattern = pattern if pattern is not None else Pattern(A)
@@ -241,6 +243,7 @@ class LDLT:
         self.n = A.shape[0]
         self.nbytes = int(self.pattern.nnz_L * np.dtype(self.dtype).itemsize)
 
+    @serial_blas
     def solve(self, b) -> np.ndarray:
         b = np.asarray(b)
         if b.shape[0] != self.n:
@@ -258,6 +261,7 @@ class LDLT:
         B = np.ascontiguousarray(B, dtype=self.dtype)
         return self._f.solve(B).reshape(b.shape)
 
+    @serial_blas
     def inverse_columns(self, idx) -> np.ndarray:
         """(n, k) the columns ``idx`` of A⁻¹.
 
@@ -271,6 +275,7 @@ class LDLT:
             raise ValueError(f"column indices must lie in [0, {self.n}), got range [{idx.min()}, {idx.max()}]")
         return self._f.inverse_columns(idx)
 
+    @serial_blas
     def inverse_diagonal(self) -> np.ndarray:
         """diag(A⁻¹) by selected inversion."""
         return self._f.inverse_diagonal()
