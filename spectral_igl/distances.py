@@ -199,6 +199,40 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     >>> d.shape, float(d[0])
     ((162,), 0.0)
     """
+    lap, filt, delta, s, tol, opts, max_recompute, return_info = _checked_arguments(
+        lap, filt, source, targets, delta, method, tol, diagonal, k, distance, samples, rtol,
+        max_colours, max_recompute, return_info)
+    n = lap.n
+    if diagonal == "eigen":
+        d = _eigen_distance(lap, filt, s, opts["k"], delta)
+        info = bound_info(np.full(n, np.nan), None, "eigen", k=opts["k"],
+                          note="truncated eigen-expansion: no error bound")
+        return _finish(d, info, targets, n, return_info)
+    if targets is not None and _targets_as_norms(lap, targets):
+        return _norm_distances(lap, filt, s, targets, delta, method, tol, return_info)
+
+    # one-to-all: column of G, diagonal of G
+    G2 = filt.square
+    e = np.zeros((n, 1))
+    e[s] = 1.0
+    diag, dinfo = _diagonal_step(lap, G2, e, delta, diagonal, method, tol, opts, progress)
+    info = dict(dinfo, diagonal_bound_kind=dinfo["bound_kind"], tol=tol)
+    col, err, kind, engine_method = _column_step(lap, G2, e, s, delta, dinfo, method, tol)
+    if engine_method is not None:
+        info["engine_method"] = engine_method
+    d, abs_error, kind, redo, unverified, d2_bound = _combination_step(
+        lap, filt, s, diag, col, err, kind, delta, method, tol, max_recompute)
+    info["recomputed"] = redo
+    info["d2_error_bound"] = d2_bound
+    info["unverified"] = unverified
+    info.update(bound_info(abs_error, kind, dinfo["method"]))
+    return _finish(d, info, targets, n, return_info)
+
+
+def _checked_arguments(lap, filt, source, targets, delta, method, tol, diagonal, k, distance, samples,
+                       rtol, max_colours, max_recompute, return_info):
+    """The arguments of :func:`spectral_distance`, checked and normalized: ``(lap, filt, delta,
+    source index, tol, options of the diagonal estimator, max_recompute, return_info)``."""
     lap = as_laplacian(lap)
     filt = check_filter(filt)
     delta = as_delta(delta)
@@ -210,34 +244,44 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     return_info = as_flag(return_info, "return_info")
     if targets is not None:
         as_indices(targets, n, "targets")
-    if diagonal == "eigen":
-        d = _eigen_distance(lap, filt, s, k, delta)
-        info = bound_info(np.full(n, np.nan), None, "eigen", k=k,
-                             note="truncated eigen-expansion: no error bound")
-        return _finish(d, info, targets, n, return_info)
+    opts = dict(k=k, distance=distance, samples=samples, rtol=rtol, max_colours=max_colours)
+    return lap, filt, delta, s, tol, opts, max_recompute, return_info
 
-    if targets is not None:
-        t = as_indices(targets, n, "targets")
-        if not (t.size > MANY_TARGETS and n > EXACT_MAX):
-            op = spectral_operator(lap, filt, method, tol)
-            d2, bound = _pair_norms(lap, op, s, t, delta)
-            info = bound_info(bound, weakest(op.bound_kind, lambda_max_kind(lap)), op.method,
-                                 tol=tol, engine_method=op.method)
-            return _finish(np.sqrt(d2), info, np.arange(t.size) if np.ndim(targets) else 0, t.size,
-                           return_info)
 
-    # one-to-all: column of G, diagonal of G
-    G2 = filt.square
-    e = np.zeros((n, 1))
-    e[s] = 1.0
+def _targets_as_norms(lap, targets) -> bool:
+    """Whether the distances to ``targets`` are computed one norm each (not through the
+    diagonal, which pays off only for many targets on a large mesh)."""
+    t = as_indices(targets, lap.n, "targets")
+    return not (t.size > MANY_TARGETS and lap.n > EXACT_MAX)
+
+
+def _norm_distances(lap, filt, s, targets, delta, method, tol, return_info):
+    """One-to-one or one-to-many: each distance the B-norm of one filtered difference of deltas."""
+    t = as_indices(targets, lap.n, "targets")
+    op = spectral_operator(lap, filt, method, tol)
+    d2, bound = _pair_norms(lap, op, s, t, delta)
+    info = bound_info(bound, weakest(op.bound_kind, lambda_max_kind(lap)), op.method,
+                      tol=tol, engine_method=op.method)
+    return _finish(np.sqrt(d2), info, np.arange(t.size) if np.ndim(targets) else 0, t.size,
+                   return_info)
+
+
+def _diagonal_step(lap, G2, e, delta, diagonal, method, tol, opts, progress):
+    """The diagonal of :math:`G` by the method ``diagonal`` chooses, with its info; when that
+    is the selected inverse, the column ``e`` is primed into the same pass over the poles
+    (one factor held at a time)."""
     kern = _coming_selinv_kernel(lap, G2, diagonal, delta, tol)
-    if kern is not None:      # the column in the diagonal's pass over the poles: one factor held at a time
+    if kern is not None:
         kern.prime(e if delta == "mass" else e * lap.mass[:, None])
-    diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, k=k, distance=distance,
-                                  samples=samples, rtol=rtol, max_colours=max_colours, tol=tol,
-                                  engine_method=method, return_info=True, progress=progress)
-    diag = np.real(diag)
-    info = dict(dinfo, diagonal_bound_kind=dinfo["bound_kind"], tol=tol)
+    diag, dinfo = kernel_diagonal(lap, G2, method=diagonal, delta=delta, tol=tol, engine_method=method,
+                                  return_info=True, progress=progress, **opts)
+    return np.real(diag), dinfo
+
+
+def _column_step(lap, G2, e, s, delta, dinfo, method, tol):
+    r"""The column :math:`G_{:,s}` and a bound ``err`` of the error its combination with the
+    diagonal makes in each :math:`d^2` (before rounding); returns ``(column, err, bound kind,
+    engine method or None)``."""
     if dinfo["method"] == "selinv":
         # the column from the same approximation R as the diagonal: d^2 is then R's own
         # squared distance, |d^2 - d_R^2| <= eps ||B^-1(e_i - e_s)||_B^2 <= 2 (bound_i + bound_s)
@@ -248,18 +292,23 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         else:
             col = lap.mass * kern.columns(e * lap.mass[:, None])[:, 0]
             bound = bound * lap.mass ** 2
-        err = 2.0 * (bound + bound[s])
-        kind = kern.bound_kind
-    else:
-        op2 = spectral_operator(lap, G2, method, tol)
-        col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
-        col_bound = np.nan if op2.error_bound is None else float(np.max(op2.error_bound))
-        # |d^2 - d~^2| <= |dG_ss| + |dG_jj| + 2 |dG_js|: the diagonal's per-vertex bound (or
-        # estimate) at j and s, and the column's per-entry bound
-        derr = np.asarray(dinfo["abs_error"], dtype=float)
-        err = derr + derr[s] + 2.0 * column_entry_error(lap, col_bound, delta)
-        kind = weakest(dinfo["bound_kind"], op2.bound_kind, lambda_max_kind(lap))
-        info["engine_method"] = op2.method
+        return col, 2.0 * (bound + bound[s]), kern.bound_kind, None
+    op2 = spectral_operator(lap, G2, method, tol)
+    col = (op2.apply_inverse_mass(e) if delta == "mass" else lap.B @ op2.apply(e))[:, 0].real
+    col_bound = np.nan if op2.error_bound is None else float(np.max(op2.error_bound))
+    # |d^2 - d~^2| <= |dG_ss| + |dG_jj| + 2 |dG_js|: the diagonal's per-vertex bound (or
+    # estimate) at j and s, and the column's per-entry bound
+    derr = np.asarray(dinfo["abs_error"], dtype=float)
+    err = derr + derr[s] + 2.0 * column_entry_error(lap, col_bound, delta)
+    kind = weakest(dinfo["bound_kind"], op2.bound_kind, lambda_max_kind(lap))
+    return col, err, kind, op2.method
+
+
+def _combination_step(lap, filt, s, diag, col, err, kind, delta, method, tol, max_recompute):
+    r""":math:`d^2 = G_{ss} + G_{jj} - 2G_{js}` with a bound of each :math:`|d - \tilde d|`;
+    every entry not safely above its bound is recomputed as a norm (at most ``max_recompute``,
+    the smallest first). Returns ``(d, abs_error, bound kind, recomputed, unverified, largest
+    bound of d^2 over the entries not recomputed)``."""
     d2 = diag[s] + diag - 2.0 * col
     d2[s] = 0.0
     # plus the rounding of the cancellation (without a bound of the parts, the entries near 0
@@ -274,7 +323,7 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
     elif redo.size > 1024:
         warnings.warn(f"{redo.size} one-to-all distances were within the diagonal's error of 0 and "
                       "are recomputed exactly; a more accurate diagonal (method='exact') is cheaper",
-                      RuntimeWarning, stacklevel=2)
+                      RuntimeWarning, stacklevel=3)
     d = np.sqrt(np.maximum(d2, 0.0))  # every entry is either > thr > 0, an exact norm or unverified
     # |d^2 - d~^2| <= thr for every entry not recomputed (clipping an unverified d~^2 < 0 at 0
     # only moves it closer); recomputed entries are norms with their own bound
@@ -287,11 +336,8 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
         kind = weakest(kind, op.bound_kind)
     if np.isnan(abs_error).any():
         kind = None
-    info["recomputed"] = redo
-    info["d2_error_bound"] = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
-    info["unverified"] = unverified
-    info.update(bound_info(abs_error, kind, dinfo["method"]))
-    return _finish(d, info, targets, n, return_info)
+    d2_bound = float(np.max(np.delete(thr, np.append(redo, s)), initial=0.0))
+    return d, abs_error, kind, redo, unverified, d2_bound
 
 
 def _finish(d, info, targets, n, return_info):

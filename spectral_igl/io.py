@@ -229,6 +229,22 @@ def _fail(path, line_no, msg):
     raise ValueError(f"{where}: not a valid {kind} file: {msg}")
 
 
+def _claimed_counts(path, no, tokens, size, bytes_each, not_counts, claims, negative=None):
+    """The counts a header claims on line ``no`` (``tokens``, each an integer), refused when
+    they are not integers (message ``not_counts``), below 0 (``negative(counts)``, default the
+    same as the next), or more items than a file of ``size`` bytes can hold at ``bytes_each``
+    bytes each (``claims(*counts)``, then "more than a file of ... bytes can hold")."""
+    try:
+        counts = [int(t) for t in tokens]
+    except (ValueError, TypeError):
+        _fail(path, no, not_counts)
+    if negative is not None and min(counts) < 0:
+        _fail(path, no, negative(counts))
+    if min(counts) < 0 or sum(counts) * bytes_each > size:
+        _fail(path, no, f"{claims(*counts)}, more than a file of {size} bytes can hold")
+    return counts
+
+
 def _text_lines(path):
     with open(path, "rb") as fh:
         for no, raw in enumerate(fh, 1):
@@ -334,15 +350,11 @@ def _parse_off(path):
     while len(rest) < 2:
         rest += tokens.line("its vertex and face counts")
         no = tokens.no
-    try:
-        nv, nf = int(rest[0]), int(rest[1])
-    except ValueError:
-        _fail(path, no, f"the counts line must give the numbers of vertices and faces, got {' '.join(rest)[:80]!r}")
-    if nv < 0 or nf < 0:
-        _fail(path, no, f"negative vertex or face count ({nv}, {nf})")
-    if (nv + nf) * _MIN_TEXT_BYTES > size:
-        _fail(path, no, f"the header claims {nv} vertices and {nf} faces, more than a file of "
-                        f"{size} bytes can hold")
+    nv, nf = _claimed_counts(
+        path, no, rest[:2], size, _MIN_TEXT_BYTES,
+        f"the counts line must give the numbers of vertices and faces, got {' '.join(rest)[:80]!r}",
+        lambda nv, nf: f"the header claims {nv} vertices and {nf} faces",
+        negative=lambda counts: f"negative vertex or face count ({counts[0]}, {counts[1]})")
     V = np.empty((nv, 3))
     for i in range(nv):
         toks, vno = tokens.item(lambda t: 3, f"its {nv} vertices")
@@ -396,13 +408,9 @@ def _check_ply(path):
     for no, raw in enumerate(head.split(b"\n"), 1):
         parts = raw.decode("latin-1").split()
         if parts[:1] == ["element"] and len(parts) >= 3:
-            try:
-                count = int(parts[2])
-            except ValueError:
-                _fail(path, no, f"element count is not an integer: {' '.join(parts)!r}")
-            if count < 0 or count > size:
-                _fail(path, no, f"the header claims {count} {parts[1]} element(s), more than a file of "
-                                f"{size} bytes can hold")
+            _claimed_counts(path, no, parts[2:3], size, 1,
+                            f"element count is not an integer: {' '.join(parts)!r}",
+                            lambda count: f"the header claims {count} {parts[1]} element(s)")
         if parts[:1] == ["end_header"]:
             return
     _fail(path, 0, "no end_header in the first 64 KiB")
@@ -432,12 +440,9 @@ def _check_medit(path):
             if not rest:
                 no, nxt = next(lines, (no + 1, ""))
                 rest = nxt.split()
-            try:
-                count = int(rest[0])
-            except (ValueError, IndexError):
-                _fail(path, no, f"{key} must be followed by a count, got {' '.join(rest)[:80]!r}")
-            if count < 0 or count * _MIN_TEXT_BYTES > size:
-                _fail(path, no, f"{key} claims {count} entries, more than a file of {size} bytes can hold")
+            _claimed_counts(path, no, rest[:1] or [None], size, _MIN_TEXT_BYTES,
+                            f"{key} must be followed by a count, got {' '.join(rest)[:80]!r}",
+                            lambda count: f"{key} claims {count} entries")
 
 
 _CHECKS = {".obj": _check_obj, ".off": _check_off, ".ply": _check_ply, ".stl": _check_stl,
