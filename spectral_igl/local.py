@@ -77,7 +77,7 @@ def _gamma(k):
     return k * U / (1.0 - k * U)
 
 
-def _drift(lap) -> float:
+def _drift(lap, mass) -> float:
     r""":math:`\rho \ge \max_j |(L\mathbf 1)_j| / B_{jj}` (proved: the computed row sums plus
     their rounding, :math:`\gamma_r \sum_k |L_{jk}|` with :math:`\sum_k|L_{jk}| \le
     2L_{jj} + |r_j|` on a Metzler L), cached on ``lap``."""
@@ -87,7 +87,7 @@ def _drift(lap) -> float:
         width = int(np.max(np.diff(L.indptr), initial=0)) + 1
         g = _gamma(width + 2)
         bound = (r + g * (2.0 * L.diagonal() + r)) * (1.0 + 4 * U)
-        return float(np.max(bound / lap.mass, initial=0.0)) * (1.0 + 4 * U)
+        return float(np.max(bound / mass, initial=0.0)) * (1.0 + 4 * U)
 
     return lap.cache.fetch("bound", "row_sum_drift", build)
 
@@ -126,27 +126,22 @@ def _region(L, h2, source: int, radius: float):
     return np.flatnonzero(np.isfinite(dist)), nearest_out
 
 
-def _spacing(lap) -> np.ndarray:
+def _spacing(lap, mass) -> np.ndarray:
     """(n,) squared spacing 4 B_jj / L_jj of each vertex (an equilateral mesh's squared edge
     length), cached on ``lap``; inf where L_jj = 0."""
     def build():
         d = lap.L.diagonal()
         with np.errstate(divide="ignore"):
-            return np.where(d > 0, 4.0 * lap.mass / np.where(d > 0, d, 1.0), np.inf)
+            return np.where(d > 0, 4.0 * mass / np.where(d > 0, d, 1.0), np.inf)
 
     return lap.cache.fetch("bound", "vertex_spacing", build)
 
 
-def _dirichlet(lap, R: np.ndarray):
-    """(alpha, P) of the Dirichlet operator of R: L_RR with the full diagonal, B_RR."""
-    L = lap.L[R][:, R]
-    return rate_matrix(L, lap.mass[R])
-
-
-def _solve(lap, R, pos, t, tail, rho):
+def _solve(lap, mass, R, pos, t, tail, rho):
     """The region's kernel, its per-entry bound, and the bound of the heat that left R."""
-    mass = lap.mass[R]
-    alpha, P = _dirichlet(lap, R)
+    mass = mass[R]
+    # the Dirichlet operator of R: L_RR with the full diagonal, B_RR
+    alpha, P = rate_matrix(lap.L[R][:, R], mass)
     g = np.zeros(R.size)
     g[pos] = 1.0 / mass[pos]
     u, e = uniformize(P, alpha, t, g, tail) if P is not None else (g, np.zeros(R.size))
@@ -236,7 +231,6 @@ def local_heat_kernel(lap: Laplacian, t: float, source, tol: float = 1e-8, retur
     return_info = as_flag(return_info, "return_info")
     K, info = _local(lap, t, source, tol)
     info["time"] = t
-    warn_missed("local_heat_kernel", info["bnorm_error"], tol / math.sqrt(lap.mass[source]))
     return (K, info) if return_info else K
 
 
@@ -250,10 +244,15 @@ def _local(lap, t, source, tol):
     area = float(np.sum(mass[comp]))
     # truncation of the series: at most tail / B_ss per entry, 1e-3 of the target in the B-norm
     tail = min(1e-3 * tol * math.sqrt(mass[source] / area), 1e-3)
-    rho = _drift(lap)
-    h2 = _spacing(lap)
+    rho = _drift(lap, mass)
+    h2 = _spacing(lap, mass)
     L = lap.L
-    radius = math.sqrt(4.0 * t * math.log(1.0 / goal)) if goal < 1 else 0.0
+    # a Gaussian's tail; where t is short against the source's own rate, heat moves by hops
+    # (k rings away with probability about (t alpha)^k / k!): the hops a Poisson tail allows
+    rate_time = 4.25 * t / h2[source]
+    hops = min(terms(t, 4.25 / h2[source], min(goal, 0.5)), 6) if rate_time < 0.2 else 0
+    radius = max(math.sqrt(4.0 * t * math.log(1.0 / goal)) if goal < 1 else 0.0,
+                 hops * math.sqrt(h2[source]) if hops else 0.0)
     while True:
         R, nearest_out = _region(L, h2, source, radius)
         if R.size > MAX_FRACTION * size:         # no use growing further: the whole component
@@ -262,11 +261,11 @@ def _local(lap, t, source, tol):
         if R.size > MAX_FRACTION * n:
             return _global(lap, t, source, tol, f"the region would cover {R.size} of the "
                            f"{n} vertices (more than {MAX_FRACTION:g})")
-        cost = terms(t, 4.25 / float(np.min(h2[R])), tail) * float(np.sum(np.diff(L.indptr)[R])) / L.nnz
+        cost = terms(t, 4.25 / float(np.min(h2[R])), tail) * float(np.sum(L.indptr[R + 1] - L.indptr[R])) / L.nnz
         if not whole and cost > BUDGET:
             return _global(lap, t, source, tol, f"the region's {R.size} vertices would take "
                            f"{cost:.3g} products of the whole operator (more than {BUDGET:g})")
-        u, e, lost, products = _solve(lap, R, int(np.searchsorted(R, source)), t, tail, rho)
+        u, e, lost, products = _solve(lap, mass, R, int(np.searchsorted(R, source)), t, tail, rho)
         bnorm = (lost / math.sqrt(min_mass) + math.sqrt(float(np.sum(mass[R] * e * e)))) * (1.0 + 1e-12)
         if bnorm <= target or whole:
             break
@@ -275,6 +274,7 @@ def _local(lap, t, source, tol):
         else:
             grow = 2.0
         radius = max(grow * radius, nearest_out)
+    warn_missed("local_heat_kernel", bnorm, target, stacklevel=4)
     K = np.zeros(n)
     K[R] = u
     err = np.zeros(n)
