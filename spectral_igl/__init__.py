@@ -96,7 +96,8 @@ __all__ = [
     # engine
     "accuracy", "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
-    "spectral_kernel", "heat_kernel", "heat_kernels", "local_heat_kernel", "kernel_diagonal", "distance_colouring",
+    "spectral_kernel", "heat_kernel", "heat_kernels", "local_heat_kernel", "kernel_diagonal",
+    "distance_colouring",
     "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",
     "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",
     "pairwise_wave_distance", "pairwise_mexican_hat_distance", "diffusion_distance",

@@ -261,7 +261,8 @@ def _local(lap, t, source, tol):
         if R.size > MAX_FRACTION * n:
             return _global(lap, t, source, tol, f"the region would cover {R.size} of the "
                            f"{n} vertices (more than {MAX_FRACTION:g})")
-        cost = terms(t, 4.25 / float(np.min(h2[R])), tail) * float(np.sum(L.indptr[R + 1] - L.indptr[R])) / L.nnz
+        row_nnz = float(np.sum(L.indptr[R + 1] - L.indptr[R]))
+        cost = terms(t, 4.25 / float(np.min(h2[R])), tail) * row_nnz / L.nnz
         if not whole and cost > BUDGET:
             return _global(lap, t, source, tol, f"the region's {R.size} vertices would take "
                            f"{cost:.3g} products of the whole operator (more than {BUDGET:g})")

@@ -45,7 +45,8 @@ def _exact(name):
     return _CACHE[name]
 
 
-@pytest.mark.parametrize("name, source", [("icosphere", 7), ("grid", 0), ("grid", 300), ("two", 5), ("two", 650)])
+@pytest.mark.parametrize("name, source",
+                         [("icosphere", 7), ("grid", 0), ("grid", 300), ("two", 5), ("two", 650)])
 @pytest.mark.parametrize("t", [1e-5, 5e-5, 2e-4])
 def test_local_column_within_its_proved_bound(name, source, t):
     lap, w, X = _exact(name)
