@@ -26,7 +26,7 @@ STAGES = {
     "approx": 4,
     "families": 5,
     "diagonal": 6,
-    "kernels": 7,
+    "kernels": 7, "local": 7,
     "distances": 8, "descriptors": 8, "embedding": 8,
     "applications": 9,
     "quantity": 10,

@@ -41,7 +41,7 @@ import numpy as np
 import scipy.sparse as sp
 
 
-__all__ = ["metzler_heat", "products_needed", "STEP", "TAIL"]
+__all__ = ["metzler_heat", "uniformize", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
 STEP = 512.0
@@ -56,22 +56,29 @@ def _gamma(k):
     return k * U / (1.0 - k * U)
 
 
-def _rate(lap):
+def rate(lap):
     """(alpha, P) with alpha = 17/16 max_j A_jj and P = I - A/alpha >= 0 (P_jj >= 1/17),
-    cached on ``lap``."""
+    cached on ``lap`` (alpha = 0 and P = None when L is 0)."""
     def build():
-        L = sp.csr_matrix(lap.L, dtype=float)
-        d = L.diagonal() / lap.mass
-        top = float(np.max(d)) if d.size else 0.0
-        if not top > 0:
-            return 0.0, None
-        alpha = 1.0625 * top
-        P = sp.csr_matrix(sp.diags(-1.0 / (lap.mass * alpha)) @ L)
-        P.setdiag(1.0 - d / alpha)
-        P.eliminate_zeros()
-        return alpha, P
+        return rate_matrix(lap.L, lap.mass)
 
     return lap.cache.fetch("bound", "uniformization", build)
+
+
+def rate_matrix(L, mass):
+    """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
+    and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
+    every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R."""
+    L = sp.csr_matrix(L, dtype=float)
+    d = L.diagonal() / mass
+    top = float(np.max(d)) if d.size else 0.0
+    if not top > 0:
+        return 0.0, None
+    alpha = 1.0625 * top
+    P = sp.csr_matrix(sp.diags(-1.0 / (mass * alpha)) @ L)
+    P.setdiag(1.0 - d / alpha)
+    P.eliminate_zeros()
+    return alpha, P
 
 
 def _terms(lam, tail):
@@ -91,6 +98,16 @@ def _terms(lam, tail):
         K += max(1, K // 256)
 
 
+def terms(t: float, alpha: float, tail: float = TAIL) -> int:
+    """Sparse products that :func:`uniformize` takes at time t and rate alpha."""
+    if alpha == 0:
+        return 0
+    if not t * alpha <= MAX_RATE_TIME:          # inf included: far beyond any budget
+        return sys.maxsize
+    s, lam = _steps(t, alpha)
+    return s * _terms(lam, tail / s)[0]
+
+
 def _steps(t, alpha):
     total = t * alpha
     s = max(1, int(math.ceil(total / STEP)))
@@ -99,13 +116,7 @@ def _steps(t, alpha):
 
 def products_needed(lap, t: float, tail: float = TAIL) -> int:
     """Sparse products (per block of columns) that :func:`metzler_heat` takes at time t."""
-    alpha, _ = _rate(lap)
-    if alpha == 0:
-        return 0
-    if not t * alpha <= MAX_RATE_TIME:          # inf included: far beyond any budget
-        return sys.maxsize
-    s, lam = _steps(t, alpha)
-    return s * _terms(lam, tail / s)[0]
+    return terms(t, rate(lap)[0], tail)
 
 
 def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
@@ -129,13 +140,42 @@ def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
     """
     if not lap.is_metzler:
         raise ValueError("metzler_heat needs a lumped mass and non-positive off-diagonal stiffness")
+    alpha, P = rate(lap)
+    return uniformize(P, alpha, t, G, tail)
+
+
+def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
+    r""":math:`e^{-t\alpha(I - P)}G` for a non-negative, sub-stochastic P, with a bound of each entry.
+
+    The engine of :func:`metzler_heat`, for a P built as there (:func:`rate`) or a principal
+    submatrix of one: :math:`P_{RR}` is the uniformized Dirichlet operator
+    :math:`I - B_{RR}^{-1}L_{RR}/\alpha` of a vertex set R (zero values outside R). Its rows sum
+    to at most 1, which is all the module notes use (:math:`\|P^k v\|_\infty \le \|v\|_\infty`,
+    the step operator non-negative with norm at most 1), so the bound is the same proof.
+
+    Parameters
+    ----------
+    P : (n, n) scipy.sparse.csr_matrix
+        Non-negative, rows summing to at most 1, diagonal at least 1/17.
+    alpha : float
+        The rate P was built with.
+    t : float
+    G : (n,) or (n, m) float, non-negative
+    tail : float
+        Allowed truncation, in total over the steps, relative to each column's maximum.
+
+    Returns
+    -------
+    U : same shape as G
+    abs_error : same shape as G
+        :math:`|U - e^{-t\alpha(I - P)}G| \le` ``abs_error`` entry by entry: a proof.
+    """
     G = np.asarray(G, dtype=float)
     if np.any(G < 0) or not np.all(np.isfinite(G)):
         raise ValueError("G must be finite and non-negative")
     one = G.ndim == 1
     V = G.reshape(G.shape[0], -1).copy()
     gmax = np.max(V, axis=0) if V.size else np.zeros(V.shape[1])
-    alpha, P = _rate(lap)
     if alpha == 0 or t == 0:
         err = np.zeros_like(V)
         return (V[:, 0], err[:, 0]) if one else (V, err)
@@ -144,7 +184,7 @@ def metzler_heat(lap, t: float, G: np.ndarray, tail: float = TAIL):
                          f"{MAX_RATE_TIME:.0e} sparse products")
     s, lam = _steps(t, alpha)
     K, step_tail = _terms(lam, tail / s)
-    r = int(np.max(np.diff(P.indptr)))
+    r = max(int(np.max(np.diff(P.indptr), initial=0)), 1)
     # entries of P within 33u: off-diagonal three roundings; diagonal 1 - x with x within 2u
     # relative, x / (1 - x) <= 16, and the subtraction's own rounding
     eps1 = 33.0 * U + _gamma(r) * (1.0 + 33.0 * U)

@@ -1,0 +1,110 @@
+"""Local heat kernel columns against dense generalized eigendecompositions."""
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+import spectral_igl as sig
+from spectral_igl.data_generators import icosphere
+from spectral_igl.data_generators.surfaces import grid_faces
+
+#: rounding of the dense reference, relative to the column's peak (eigh of n <= 700)
+REFERENCE = 1e-12
+
+
+def _grid(N=24, seed=0):
+    """Jittered unit square with its boundary (N x N cells)."""
+    x = np.linspace(0.0, 1.0, N + 1)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    rng = np.random.default_rng(seed)
+    inner = (X > 0) & (X < 1) & (Y > 0) & (Y < 1)
+    J = rng.uniform(-0.3, 0.3, (2,) + X.shape) / N
+    X, Y = X + J[0] * inner, Y + J[1] * inner
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    return V, grid_faces(N + 1, N + 1, False, False)
+
+
+def _two_components():
+    V1, F1 = icosphere(3)
+    V2, F2 = icosphere(1, radius=0.3)
+    return np.r_[V1, V2 + [3.0, 0.0, 0.0]], np.r_[F1, F2 + len(V1)]
+
+
+MESHES = {"icosphere": lambda: icosphere(3), "grid": _grid, "two": _two_components}
+_CACHE = {}
+
+
+def _exact(name):
+    if name not in _CACHE:
+        V, F = MESHES[name]()
+        lap = sig.laplacian(V, F)
+        V = V / np.sqrt(lap.area())          # unit area
+        lap = sig.laplacian(V, F)
+        assert lap.is_metzler
+        w, X = sl.eigh(lap.L.toarray(), lap.B.toarray())
+        _CACHE[name] = lap, w, X
+    return _CACHE[name]
+
+
+@pytest.mark.parametrize("name, source",
+                         [("icosphere", 7), ("grid", 0), ("grid", 300), ("two", 5), ("two", 650)])
+@pytest.mark.parametrize("t", [1e-5, 5e-5, 2e-4])
+def test_local_column_within_its_proved_bound(name, source, t):
+    lap, w, X = _exact(name)
+    exact = X @ (np.exp(-t * w) * X[source])
+    k, info = sig.local_heat_kernel(lap, t, source, return_info=True)
+    assert info["bound_kind"] == "proof" and info["method"] == "local"
+    peak = exact.max()
+    # every entry within its bound
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * peak)
+    # below the truth up to the region solver's own bound (the Dirichlet kernel is a lower bound)
+    assert np.all(k - info["solver_error"] <= exact + REFERENCE * peak)
+    # the bound keeps the promise of the global path: tol / sqrt(B_ss B_jj) per entry
+    mass = lap.mass
+    target = 1e-8 / np.sqrt(mass[source])
+    assert info["bnorm_error"] <= target
+    assert np.all(info["abs_error"] <= target / np.sqrt(mass))
+    # and it is not loose: within 200x of the column's B-norm error, or far below the target
+    diff = k - exact
+    assert np.sqrt(diff @ (mass * diff)) * 200 >= info["bnorm_error"] or info["bnorm_error"] < 1e-2 * target
+    # other components get exactly nothing
+    other = lap.components != lap.components[source]
+    assert np.all(k[other] == 0) and np.all(info["abs_error"][other] == 0)
+
+
+def test_region_grows_with_t():
+    lap, _, _ = _exact("grid")
+    sizes = [sig.local_heat_kernel(lap, t, 300, return_info=True)[1]["region"] for t in (1e-5, 5e-5, 2e-4)]
+    assert sizes[0] < sizes[1] < sizes[2] < lap.n // 4
+
+
+def test_small_component_is_solved_whole():
+    lap, w, X = _exact("two")
+    source = 650                               # on the small sphere (42 vertices)
+    small = int(np.count_nonzero(lap.components == lap.components[source]))
+    k, info = sig.local_heat_kernel(lap, 1.0, source, return_info=True)
+    exact = X @ (np.exp(-1.0 * w) * X[source])
+    # nothing leaves the component: the lost heat is only what the solver's own bound allows
+    assert info["region"] == small and info["method"] == "local"
+    assert info["m_lost"] <= 2.5 * np.sum(lap.mass * info["solver_error"]) + 1e-14
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+
+
+def test_large_t_falls_back_to_the_global_path():
+    lap, w, X = _exact("icosphere")
+    k, info = sig.local_heat_kernel(lap, 0.05, 3, return_info=True)
+    exact = X @ (np.exp(-0.05 * w) * X[3])
+    assert info["method"].startswith("global") and "region" in info["note"]
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+
+
+def test_refuses_non_metzler():
+    V, F = icosphere(2)
+    lap = sig.laplacian(V, F, mass="full")
+    with pytest.raises(ValueError, match="positive=True"):
+        sig.local_heat_kernel(lap, 1e-3, 0)
+
+
+def test_bad_source():
+    lap, _, _ = _exact("icosphere")
+    with pytest.raises(ValueError, match="source"):
+        sig.local_heat_kernel(lap, 1e-3, lap.n)
