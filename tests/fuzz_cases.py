@@ -454,6 +454,11 @@ def run_case(build, case) -> dict:
     except (ValueError, TypeError, FileNotFoundError, IsADirectoryError) as err:
         # a missing file or a directory: the standard exceptions of file functions
         return {"outcome": "refused", "detail": f"{type(err).__name__}: {err}"[:300]}
+    except ImportError as err:
+        # a missing optional dependency: one line ending with the command that installs it
+        if "\n" in str(err) or "pip install" not in str(err):
+            return {"outcome": "bad", "detail": f"ImportError without its install command: {err}"[:300]}
+        return {"outcome": "refused", "detail": f"ImportError: {err}"[:300]}
     except Exception as err:  # noqa: BLE001 - any other type is a finding
         tb = traceback.format_exc().strip().splitlines()[-3:]
         return {"outcome": "bad", "detail": f"{type(err).__name__}: {err}"[:300] + " | " + " / ".join(tb)[:300]}
