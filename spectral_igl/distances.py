@@ -469,11 +469,43 @@ def _timed(lap, t, time_unit):
 def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Diffusion distance at time ``t``: :math:`|\varphi|^2(s) = e^{-ts}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Diffusion time, :math:`t > 0`, in the units ``time_unit``.
+    [one-to-all parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d_t^2(i, j) = \sum_l e^{-t\lambda_l} |x_l(i) - x_l(j)|^2 = K_t(i,i) + K_t(j,j) - 2K_t(i,j)
 
-    with :math:`K_t = e^{-t\tilde L}B^{-1}` the heat kernel. ``time_unit`` gives ``t`` in the
-    shape's units (:mod:`spectral_igl.laplacian.units`; default ``"absolute"``); other keyword
-    arguments as in :func:`spectral_distance`.
+    with :math:`K_t = e^{-t\tilde L}B^{-1}` the heat kernel (the survey's diffusion distance,
+    with :math:`B^{-1}e_i` for the delta so that it converges under refinement): the filter
+    passed to :func:`spectral_distance` is ``heat(t / 2)``.
+
+    Examples
+    --------
+    Against the dense eigendecomposition of a small sphere:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d = sig.diffusion_distance(lap, 0.1, 0)
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = np.sqrt((X[0] - X) ** 2 @ np.exp(-0.1 * lam))
+    >>> d.shape, bool(np.max(np.abs(d - exact)) < 1e-6)
+    ((162,), True)
     """
     lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, heat(t / 2.0), source, targets, **kwargs)
@@ -482,10 +514,35 @@ def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute"
 def commute_time_distance(lap, source, targets=None, **kwargs):
     r"""Commute-time distance: :math:`|\varphi|^2(s) = s^{-1}` on the complement of ker L.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    [one-to-all parameters]
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-1} |x_l(i) - x_l(j)|^2
 
     On surfaces it diverges logarithmically under refinement (the Green's function is
     singular at the diagonal); it is scale invariant in 2-D.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d = sig.commute_time_distance(lap, 0, [1, 2, 3])
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = np.sqrt((X[0] - X[[1, 2, 3]])[:, 1:] ** 2 @ (1 / lam[1:]))
+    >>> bool(np.max(np.abs(d - exact)) < 1e-6)
+    True
     """
     return spectral_distance(lap, commute_time(), source, targets, **kwargs)
 
@@ -493,7 +550,35 @@ def commute_time_distance(lap, source, targets=None, **kwargs):
 def biharmonic_distance(lap, source, targets=None, **kwargs):
     r"""Biharmonic distance (Lipman et al. 2010): :math:`|\varphi|^2(s) = s^{-2}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    [one-to-all parameters]
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-2} |x_l(i) - x_l(j)|^2
+
+    Lipman et al.'s definition (the survey's biharmonic distance): smooth, and convergent
+    under refinement on surfaces.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d, info = sig.biharmonic_distance(lap, 0, return_info=True)
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = np.sqrt((X[0] - X)[:, 1:] ** 2 @ lam[1:] ** -2.0)
+    >>> bool(np.all(np.abs(d - exact) <= info["abs_error"])), info["bound_kind"]
+    (True, 'proof')
     """
     return spectral_distance(lap, biharmonic(), source, targets, **kwargs)
 
@@ -501,11 +586,38 @@ def biharmonic_distance(lap, source, targets=None, **kwargs):
 def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
     r"""Poly-harmonic distance of integer order ``k``: :math:`|\varphi|^2(s) = s^{-k}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    k : int
+        The order, 1 to :data:`MAX_ORDER` (16): :math:`\lambda^{-k}` spans
+        :math:`(\lambda_{max}/\lambda_{min})^k`, beyond double precision for larger orders on
+        any mesh, and the distance is then that of the first eigenfunction alone.
+    [one-to-all parameters]
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
 
-    ``k`` is at most :data:`MAX_ORDER`: :math:`\lambda^{-k}` spans
-    :math:`(\lambda_{max}/\lambda_{min})^k`, beyond double precision for larger orders on
-    any mesh, and the distance is then that of the first eigenfunction alone.
+    ``k = 1`` is the commute-time distance, ``k = 2`` the biharmonic one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d = sig.polyharmonic_distance(lap, 3, 0, 7)
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = np.sqrt((X[0] - X[7])[1:] ** 2 @ lam[1:] ** -3.0)
+    >>> bool(abs(d - exact) < 1e-6 * exact)
+    True
     """
     k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return spectral_distance(lap, polyharmonic(k), source, targets, **kwargs)
@@ -514,11 +626,44 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
 def wave_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Spectral distance of the Schrödinger wave kernel :math:`\varphi(s) = e^{-ist}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Time of the wave propagator, in the units ``time_unit`` (the distance does not
+        depend on it, see Notes).
+    [one-to-all parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_l |e^{-i\lambda_l t}|^2 |x_l(i) - x_l(j)|^2
+              = \|B^{-1}(e_i - e_j)\|_B^2
 
     The wave propagator is unitary, :math:`|\varphi|^2 = 1`, so this distance does not
     depend on ``t``: it is the B-norm of the difference of the two discrete deltas
     (and grows under refinement). Provided for completeness of the survey's family.
+
+    Examples
+    --------
+    With a lumped mass matrix the distance between two vertices is
+    :math:`\sqrt{1/m_i + 1/m_j}`:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d = sig.wave_distance(lap, 0.3, 0, 5)
+    >>> bool(abs(d - np.sqrt(1 / lap.mass[0] + 1 / lap.mass[5])) < 1e-6 * d)
+    True
     """
     lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, wave(t), source, targets, **kwargs)
@@ -527,7 +672,37 @@ def wave_distance(lap, t, source, targets=None, time_unit: str = "absolute", **k
 def mexican_hat_distance(lap, t, source, targets=None, time_unit: str = "absolute", **kwargs):
     r"""Mexican-hat distance: :math:`\varphi(s) = t s e^{-ts}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Scale of the wavelet, :math:`t > 0`, in the units ``time_unit``.
+    [one-to-all parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [one-to-all options]
+
+    Returns
+    -------
+    [one-to-all returns]
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(i) - x_l(j)|^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> d = sig.mexican_hat_distance(lap, 0.1, 0, [4, 9])
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = np.sqrt((X[0] - X[[4, 9]]) ** 2 @ (0.1 * lam * np.exp(-0.1 * lam)) ** 2)
+    >>> bool(np.max(np.abs(d - exact)) < 1e-6)
+    True
     """
     lap, t = _timed(lap, t, time_unit)
     return spectral_distance(lap, mexican_hat(t), source, targets, **kwargs)
@@ -603,48 +778,273 @@ def pairwise_diffusion_distance(lap, t, seeds, time_unit: str = "absolute", **kw
     r"""(m, m) diffusion distances at time ``t`` between ``seeds``; entries equal
     :func:`diffusion_distance`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Diffusion time, :math:`t > 0`, in the units ``time_unit``.
+    [pairwise parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
     .. math:: D_{ab}^2 = \sum_l e^{-t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
 
     (the filter passed to :func:`pairwise_spectral_distance` is ``heat(t / 2)``).
-    Keyword arguments as in :func:`pairwise_spectral_distance`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D = sig.pairwise_diffusion_distance(lap, 0.1, [0, 5, 9])
+    >>> d = sig.diffusion_distance(lap, 0.1, 5, [0, 5, 9])
+    >>> D.shape, bool(np.allclose(D, D.T)), bool(np.max(np.abs(D[1] - d)) < 1e-6)
+    ((3, 3), True, True)
     """
     lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, heat(t / 2.0), seeds, **kwargs)
 
 
 def pairwise_commute_time_distance(lap, seeds, **kwargs):
-    r"""(m, m) commute-time distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-1}|x_l(s_a)-x_l(s_b)|^2`;
-    entries equal :func:`commute_time_distance`."""
+    r"""(m, m) commute-time distances between ``seeds``; entries equal
+    :func:`commute_time_distance`.
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    [pairwise parameters]
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
+    .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-1}|x_l(s_a)-x_l(s_b)|^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D = sig.pairwise_commute_time_distance(lap, [0, 5, 9])
+    >>> d = sig.commute_time_distance(lap, 9, [0, 5, 9])
+    >>> bool(np.max(np.abs(D[2] - d)) < 1e-6), float(D[2, 2])
+    (True, 0.0)
+    """
     return pairwise_spectral_distance(lap, commute_time(), seeds, **kwargs)
 
 
 def pairwise_biharmonic_distance(lap, seeds, **kwargs):
-    r"""(m, m) biharmonic distances, :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-2}|x_l(s_a)-x_l(s_b)|^2`;
-    entries equal :func:`biharmonic_distance`."""
+    r"""(m, m) biharmonic distances between ``seeds``; entries equal :func:`biharmonic_distance`.
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    [pairwise parameters]
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
+    .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-2}|x_l(s_a)-x_l(s_b)|^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D, info = sig.pairwise_biharmonic_distance(lap, [0, 5, 9], return_info=True)
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> Y = X[[0, 5, 9], 1:] / lam[1:]
+    >>> exact = np.sqrt(((Y[:, None] - Y[None]) ** 2).sum(-1))
+    >>> bool(np.all(np.abs(D - exact) <= info["abs_error"])), info["bound_kind"]
+    (True, 'proof')
+    """
     return pairwise_spectral_distance(lap, biharmonic(), seeds, **kwargs)
 
 
 def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
-    r"""(m, m) poly-harmonic distances of order ``k``,
-    :math:`D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2`; entries equal
-    :func:`polyharmonic_distance`."""
+    r"""(m, m) poly-harmonic distances of order ``k`` between ``seeds``; entries equal
+    :func:`polyharmonic_distance`.
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    k : int
+        The order, 1 to :data:`MAX_ORDER` (16), as in :func:`polyharmonic_distance`.
+    [pairwise parameters]
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
+    .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D = sig.pairwise_polyharmonic_distance(lap, 2, [0, 5, 9])
+    >>> B = sig.pairwise_biharmonic_distance(lap, [0, 5, 9])
+    >>> bool(np.max(np.abs(D - B)) < 1e-6)
+    True
+    """
     k = as_int(k, "k", lo=1, hi=MAX_ORDER)
     return pairwise_spectral_distance(lap, polyharmonic(k), seeds, **kwargs)
 
 
 def pairwise_wave_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs):
-    r"""(m, m) wave-kernel distances, :math:`|\varphi|^2 = 1`; entries equal :func:`wave_distance`.
+    r"""(m, m) wave-kernel distances between ``seeds``; entries equal :func:`wave_distance`.
 
-    .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Time of the wave propagator, in the units ``time_unit`` (the distance does not
+        depend on it: :math:`|\varphi|^2 = 1`).
+    [pairwise parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
+    .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2 = \|B^{-1}(e_{s_a} - e_{s_b})\|_B^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D = sig.pairwise_wave_distance(lap, 0.3, [0, 5])
+    >>> bool(abs(D[0, 1] - np.sqrt(1 / lap.mass[0] + 1 / lap.mass[5])) < 1e-6 * D[0, 1])
+    True
     """
     lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, wave(t), seeds, **kwargs)
 
 
 def pairwise_mexican_hat_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs):
-    r"""(m, m) Mexican-hat distances; entries equal :func:`mexican_hat_distance`.
+    r"""(m, m) Mexican-hat distances between ``seeds``; entries equal
+    :func:`mexican_hat_distance`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Scale of the wavelet, :math:`t > 0`, in the units ``time_unit``.
+    [pairwise parameters]
+    time_unit : str
+        ``"absolute"`` (default), or times in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+    [pairwise options]
+
+    Returns
+    -------
+    [pairwise returns]
+
+    Notes
+    -----
     .. math:: D_{ab}^2 = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> D = sig.pairwise_mexican_hat_distance(lap, 0.1, [0, 5, 9])
+    >>> d = sig.mexican_hat_distance(lap, 0.1, 0, [0, 5, 9])
+    >>> bool(np.max(np.abs(D[0] - d)) < 1e-6)
+    True
     """
     lap, t = _timed(lap, t, time_unit)
     return pairwise_spectral_distance(lap, mexican_hat(t), seeds, **kwargs)
+
+
+# ---------------------------------------------------------------------------------------
+# the sections the named distances share, written once
+# ---------------------------------------------------------------------------------------
+_SHARED_SECTIONS = {
+    "one-to-all parameters": """\
+    source : int
+        Vertex index of the source.
+    targets : None, int or (m,) int
+        ``None`` (default): every vertex (one-to-all); otherwise the target vertices, each
+        distance the exact B-norm of one filtered difference of deltas.""",
+    "one-to-all options": """\
+    **kwargs
+        ``delta``, ``method``, ``tol``, ``diagonal``, ``k``, ``distance``, ``samples``,
+        ``rtol``, ``max_colours``, ``max_recompute``, ``return_info``, ``progress``: as in
+        :func:`spectral_distance` (``delta="mass"``, ``method="auto"``, ``tol=1e-8``,
+        ``diagonal="auto"`` by default).""",
+    "one-to-all returns": """\
+    d : float, (m,) float or (n,) float
+        The distances: a float for an integer target, one per target, or one per vertex.
+    info : dict
+        Only with ``return_info=True``: ``abs_error`` (a bound of every :math:`|d - \\tilde d|`,
+        shaped as ``d``), ``bound_kind`` and ``method``; see :func:`spectral_distance`.""",
+    "pairwise parameters": """\
+    seeds : (m,) int
+        Vertex indices.""",
+    "pairwise options": """\
+    **kwargs
+        ``delta``, ``method``, ``tol``, ``progress``, ``block``, ``return_info``: as in
+        :func:`pairwise_spectral_distance` (``delta="mass"``, ``method="auto"``,
+        ``tol=1e-8`` by default).""",
+    "pairwise returns": """\
+    D : (m, m) float
+        Symmetric, zero diagonal: ``D[a, b]`` is the distance between ``seeds[a]`` and
+        ``seeds[b]``.
+    info : dict
+        Only with ``return_info=True``: ``abs_error`` (m, m), a bound of every
+        :math:`|D_{ab} - \\tilde D_{ab}|`, ``bound_kind`` and ``method``; see
+        :func:`pairwise_spectral_distance`.""",
+}
+
+
+def _fill_shared_sections(fn):
+    """Put the shared sections in place of their ``[name]`` lines in ``fn``'s docstring."""
+    for key, text in _SHARED_SECTIONS.items():
+        fn.__doc__ = fn.__doc__.replace(f"    [{key}]", text)
+    return fn
+
+
+for _fn in (diffusion_distance, commute_time_distance, biharmonic_distance, polyharmonic_distance,
+            wave_distance, mexican_hat_distance, pairwise_diffusion_distance,
+            pairwise_commute_time_distance, pairwise_biharmonic_distance, pairwise_polyharmonic_distance,
+            pairwise_wave_distance, pairwise_mexican_hat_distance):
+    _fill_shared_sections(_fn)

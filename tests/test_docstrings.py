@@ -5,7 +5,10 @@ import ast
 import doctest
 import importlib
 import importlib.util
+import inspect
 import pkgutil
+import re
+from pathlib import Path
 
 import pytest
 
@@ -71,3 +74,136 @@ def test_docstring_example(test, tmp_path, monkeypatch):
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     result = runner.run(test, out=lambda s: print(s, end=""))
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed in {test.name}"
+
+
+API_RST = Path(__file__).resolve().parents[1] / "docs" / "api.rst"
+
+#: public names whose modules (spectral_igl/collection, applications/transport.py) are being
+#: rewritten together with their docstrings; each leaves this set, and then meets the same
+#: standard, as its sections land
+PENDING = {
+    "collection.run", "collection.load", "collection.RunSummary", "collection.Loaded",
+    "collection.ShapeResult", "collection.collect_inputs", "collection.estimate_memory",
+    "wasserstein_distance", "wasserstein_barycenter", "applications.sinkhorn",
+}
+
+
+def _api_rst_names() -> list[str]:
+    """Dotted names (relative to ``spectral_igl``) in the autosummary tables of docs/api.rst."""
+    text = API_RST.read_text(encoding="utf-8")
+    names = []
+    for block in re.findall(r"\.\. autosummary::\n((?:   .*\n|\n)+)", text):
+        names += [s.strip().lstrip("~").removeprefix("spectral_igl.") for s in block.splitlines()
+                  if s.strip() and not s.strip().startswith(":")]
+    return names
+
+
+def _resolve(dotted: str):
+    """The object ``spectral_igl.<dotted>``: the longest importable module prefix, then attributes
+    (as autosummary resolves it)."""
+    parts = ("spectral_igl." + dotted).split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            obj = getattr(obj, attr)
+        return obj
+    raise ImportError(dotted)
+
+
+def _public():
+    """``{name: object}`` for ``spectral_igl.__all__`` and every docs/api.rst entry that is a
+    function or a class (modules and constants have no sections to check)."""
+    out = {name: getattr(spectral_igl, name) for name in spectral_igl.__all__}
+    out.update({name: _resolve(name) for name in _api_rst_names() if name not in out})
+    return {k: v for k, v in out.items() if inspect.isclass(v) or inspect.isroutine(v)}
+
+
+PUBLIC = _public()
+
+
+def _has_section(doc: str, *titles: str) -> bool:
+    return any(re.search(rf"^{t}\n-{{3,}}\s*$", doc, re.M) for t in titles)
+
+
+def _parameters(obj) -> list[str]:
+    target = obj.__init__ if inspect.isclass(obj) else obj
+    try:
+        sig = inspect.signature(target)
+    except (TypeError, ValueError):
+        return []
+    return [p for p in sig.parameters if p not in ("self", "cls")]
+
+
+def _missing_sections(obj) -> list[str]:
+    doc = inspect.getdoc(obj) or ""
+    missing = []
+    if _parameters(obj) and not _has_section(doc, "Parameters", "Attributes"):
+        missing.append("Parameters")
+    if not inspect.isclass(obj) and not _has_section(doc, "Returns", "Yields"):
+        missing.append("Returns")
+    if not _has_section(doc, "Examples"):
+        missing.append("Examples")
+    return missing
+
+
+def test_public_names_are_found():
+    # __all__ (77 names) plus the api.rst tables: a collapse means the parser broke
+    assert len(PUBLIC) > 130 and "hks" in PUBLIC and "filters.heat" in PUBLIC
+
+
+@pytest.mark.parametrize("name", sorted(PUBLIC))
+def test_public_docstring_has_sections(name):
+    missing = _missing_sections(PUBLIC[name])
+    if name in PENDING:
+        pytest.skip(f"pending: {missing}" if missing else "pending, now complete: empty it from PENDING")
+    assert not missing, f"spectral_igl.{name}: the docstring has no {', '.join(missing)} section"
+
+
+def _documented_objects():
+    """``{qualified name: object}`` for every module, class, function and method of the package."""
+    out = {}
+    for modname in _modules():
+        module = importlib.import_module(modname)
+        out[modname] = module
+        for name, obj in vars(module).items():
+            if getattr(obj, "__module__", None) != modname:
+                continue
+            if inspect.isclass(obj):
+                out[f"{modname}.{name}"] = obj
+                for attr, member in vars(obj).items():
+                    member = getattr(member, "fget", getattr(member, "__func__", member))
+                    if inspect.isroutine(member) and member.__doc__:
+                        out[f"{modname}.{name}.{attr}"] = member
+            elif inspect.isroutine(obj):
+                out[f"{modname}.{name}"] = obj
+    return out
+
+
+DOCUMENTED = _documented_objects()
+
+
+def test_no_docstring_has_control_characters():
+    # a backslash in a docstring that is not raw (\v of \varphi, \f of \frac) becomes a
+    # control character and the maths renders as garbage
+    bad = {name: sorted({repr(c) for c in obj.__doc__ if ord(c) < 32 and c not in "\n\t"})
+           for name, obj in DOCUMENTED.items() if obj.__doc__}
+    bad = {k: v for k, v in bad.items() if v}
+    assert not bad, f"control characters (make these docstrings raw): {bad}"
+
+
+#: what numpydoc may take as the name of a parameter, return value or attribute
+ENTRY_NAME = re.compile(r"^\*{0,2}\w+(, \*{0,2}\w+)*$|^$")
+
+
+@pytest.mark.parametrize("name", sorted(PUBLIC))
+def test_public_docstring_entries_are_names(name):
+    # a paragraph indented as an entry (after a parameter's description, or a note placed in
+    # Returns) renders as a bold fake parameter with its markup shown raw
+    docscrape = pytest.importorskip("numpydoc.docscrape")
+    doc = docscrape.NumpyDocString(inspect.getdoc(PUBLIC[name]) or "")
+    bad = [p.name for section in ("Parameters", "Returns", "Yields", "Attributes", "Other Parameters")
+           for p in doc[section] if not ENTRY_NAME.match(p.name)]
+    assert not bad, f"spectral_igl.{name}: entries that are not names: {bad}"
