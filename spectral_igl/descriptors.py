@@ -41,11 +41,32 @@ def spectral_band(lap, k: int = BAND):
     (:func:`spectral_igl.linalg.eigenvalue_bracket`: a few inertia counts, no eigenvector);
     for ``k >= n`` the proved :func:`spectral_igl.lambda_max`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    k : int
+        Number of eigenvalues in the band (default 200), counted with the zeros of ker L.
+
     Returns
     -------
     lam_lo, lam_hi : float
+        The ends of the band.
     kind : str
         ``"proof"`` or ``"estimate"`` (of the brackets behind the two ends).
+
+    Examples
+    --------
+    The unit sphere's eigenvalues are :math:`l(l+1)` with multiplicity :math:`2l+1`:
+    :math:`\lambda_1 = 0`, :math:`\lambda_2 = \dots = \lambda_4 = 2`,
+    :math:`\lambda_5 = \dots = \lambda_9 = 6`; a 642-vertex sphere is close:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lo, hi, kind = sig.spectral_band(sig.laplacian(*icosphere(3)), 9)
+    >>> bool(1.9 < lo <= 2.0), bool(5.8 < hi < 6.3), kind
+    (True, True, 'proof')
     """
     lap = as_laplacian(lap)
     k = as_int(k, "k", lo=1)
@@ -69,6 +90,20 @@ def hks_times(lap, n: int = GRID_SIZE, k: int = BAND):
     at the last, the first non-constant one's is. The same as pyFM's ``auto_HKS`` on the same
     ``k`` eigenvalues (to the bracket's 2.5%), and covariant with scale: on a shape scaled by
     s every time is multiplied by :math:`s^2`.
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    n : int
+        Number of times (default 100).
+    k : int
+        The band spans the first ``k`` eigenvalues (default 200; :func:`spectral_band`).
+
+    Returns
+    -------
+    times : (n,) float
+        Increasing, log-spaced.
 
     Examples
     --------
@@ -96,10 +131,32 @@ def wks_energies(lap, n: int = GRID_SIZE, k: int = BAND):
     choice as pyFM's ``auto_WKS`` implements it; fewer energies keep the band width of 100
     (a wider one would blur every energy into its neighbours').
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    n : int
+        Number of energies (default 100).
+    k : int
+        The band spans the first ``k`` eigenvalues (default 200; :func:`spectral_band`).
+
     Returns
     -------
     energies : (n,) float
+        Log-energies, evenly spaced.
     sigma : float
+        The band width :math:`\sigma`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> e, sigma = sig.wks_energies(lap, n=5, k=50)
+    >>> lo, hi, _ = sig.spectral_band(lap, 50)
+    >>> bool(np.isclose(e[0] - 2 * sigma, np.log(lo))), bool(np.isclose(sigma, 7 * np.log(hi / lo) / 100))
+    (True, True)
     """
     lap = as_laplacian(lap)
     n = as_int(n, "n", lo=1, hi=MAX_SCALES)
@@ -150,8 +207,10 @@ def spectral_descriptor(lap, filt, method: str = "auto", return_info: bool = Fal
 
     Parameters
     ----------
-    lap : Laplacian
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
     filt : Filter
+        :math:`\varphi` (:mod:`spectral_igl.filters`).
     method : str
         Diagonal method, see :func:`spectral_igl.kernel_diagonal` (``"auto"``: selected
         inversion of a rational approximation, with a certified error bound).
@@ -163,8 +222,22 @@ def spectral_descriptor(lap, filt, method: str = "auto", return_info: bool = Fal
 
     Returns
     -------
-    (n,) float
-    info : dict, only with ``return_info``
+    SD : (n,) float
+        :math:`K(i, i)` at every vertex.
+    info : dict
+        Only with ``return_info=True``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> sd = sig.spectral_descriptor(lap, sig.filters.mexican_hat(0.2))
+    >>> lam, X = sig.dense_eigs(lap)
+    >>> exact = X ** 2 @ (0.2 * lam * np.exp(-0.2 * lam))
+    >>> bool(np.max(np.abs(sd - exact)) < 1e-6)
+    True
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
@@ -179,7 +252,8 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
 
     Parameters
     ----------
-    lap : Laplacian
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
     times : float or (T,) float, optional
         Diffusion times, in the units ``time_unit``. Default: :func:`hks_times` (100 times
         spread over the band of the first 200 eigenvalues, from the spectrum, spectrum-free).
@@ -206,16 +280,39 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.
 
+    Returns
+    -------
+    H : (n,) or (n, T) float
+        :math:`K_t(i, i)`: (n,) for a scalar time, (n, T) for an array of T times.
+    info : dict
+        Only with ``return_info=True``; see ``return_info``.
+
+    Notes
+    -----
     Several times with ``method="selinv"``, or ``"auto"`` above 3000 vertices or for 8 times
     or more, share one set of poles
     (:func:`spectral_igl.families.heat_diagonals`): about as many factorizations
     as one time, each time with its own certified bound (``kernel_diagonal`` options other
     than ``tol`` select the one-time-at-a-time path).
 
-    Returns
-    -------
-    (n,) float for a scalar time, (n, len(times)) float for an array of times.
-    info : dict, only with ``return_info``
+    Examples
+    --------
+    The signature is the heat kernel's diagonal. On the unit sphere every point sees the
+    same spectrum, :math:`\lambda = l(l+1)` with multiplicity :math:`2l+1`, so
+    :math:`K_t(i,i) = \sum_l \frac{2l+1}{4\pi} e^{-l(l+1)t}`; a 642-vertex sphere is within 1%
+    of it at :math:`t = 1`:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> H, info = sig.hks(lap, [0.1, 1.0], return_info=True)
+    >>> H.shape, info["bound_kind"], bool(np.all(info["abs_error"] < 1e-8))
+    ((642, 2), 'proof', True)
+    >>> l = np.arange(60)
+    >>> exact = np.sum((2 * l + 1) / (4 * np.pi) * np.exp(-l * (l + 1) * 1.0))
+    >>> bool(np.all(np.abs(H[:, 1] - exact) < 0.01 * exact))
+    True
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
@@ -348,6 +445,8 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
 
     Parameters
     ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
     energies : float or (E,) float, optional
         Log-energies :math:`e`. Default: :func:`wks_energies` over the band of the first
         ``k`` non-zero eigenvalues (100 energies, Aubry et al.'s spacing and ``sigma``), from
@@ -384,8 +483,23 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
 
     Returns
     -------
-    (n,) float for a scalar energy, (n, E) float for an array.
-    info : dict, only with ``return_info``
+    W : (n,) or (n, E) float
+        (n,) for a scalar energy, (n, E) for E energies.
+    info : dict
+        Only with ``return_info=True``.
+
+    Examples
+    --------
+    With a lumped mass matrix the normaliser is :math:`\sum_i m_i K(i,i)`, so the
+    mass-weighted sum of the signature is 1 at every energy:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> W = sig.wks(lap, [1.0, 2.0, 3.0], sigma=0.5, method="auto")
+    >>> W.shape, np.round(lap.mass @ W, 6)
+    ((162, 3), array([1., 1., 1.]))
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
@@ -468,17 +582,50 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
 def auto_diffusion_function(lap, t, method: str = "auto", return_info: bool = False, **kwargs):
     r"""Auto-diffusion function (Gebal et al. 2009), scale invariant.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float or (T,) float
+        Times in units of :math:`1/\lambda_2`.
+    method : str
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal`.
+    return_info : bool
+        With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error``, the
+        area times the heat diagonal's bound at the time :math:`t/\tilde\lambda_2`; its
+        ``bound_kind`` is at best ``"estimate"``: :math:`\tilde\lambda_2` is a Lanczos eigenvalue
+        (not certified) and its error moves the time itself (``note``). ``lambda2`` is that value.
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
+
+    Returns
+    -------
+    ADF : (n,) or (n, T) float
+        (n,) for a scalar time, (n, T) for T times.
+    info : dict
+        Only with ``return_info=True``.
+
+    Notes
+    -----
     .. math:: ADF_t(i) = A\, K_{t/\lambda_2}(i, i) = A \sum_l e^{-t\lambda_l/\lambda_2}\, x_l(i)^2
 
     Time is measured in units of :math:`1/\lambda_2` (the first non-zero eigenvalue,
     Gebal et al.'s normalisation) and the value is multiplied by the area :math:`A`, so
     ADF is invariant under a uniform scaling of the shape and equals 1 at large t on a
-    connected shape. Returns (n,) float, or (n, len(t)) for an array of times.
+    connected shape.
 
-    With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error``, the
-    area times the heat diagonal's bound at the time :math:`t/\tilde\lambda_2`; its
-    ``bound_kind`` is at best ``"estimate"``: :math:`\tilde\lambda_2` is a Lanczos eigenvalue
-    (not certified) and its error moves the time itself (``note``). ``lambda2`` is that value.
+    Examples
+    --------
+    The same values on a shape ten times larger, and 1 at large times:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(2)
+    >>> a = sig.auto_diffusion_function(sig.laplacian(V, F), [0.5, 50.0])
+    >>> b = sig.auto_diffusion_function(sig.laplacian(10 * V, F), [0.5, 50.0])
+    >>> bool(np.max(np.abs(a - b)) < 1e-6), bool(np.max(np.abs(a[:, 1] - 1)) < 1e-6)
+    (True, True)
     """
     lap = as_laplacian(lap)
     return_info = as_flag(return_info, "return_info")
@@ -504,6 +651,32 @@ def auto_diffusion_function(lap, t, method: str = "auto", return_info: bool = Fa
 def eccentricity(lap, filt, method: str = "auto", return_info: bool = False, **kwargs):
     r"""Spectral eccentricity: the root-mean-square spectral distance to the shape.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    filt : Filter
+        :math:`\varphi`; the distance uses :math:`|\varphi|^2` (:func:`spectral_igl.spectral_distance`).
+    method : str
+        Diagonal method, see :func:`spectral_igl.kernel_diagonal`.
+    return_info : bool
+        With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` (n,)
+        from the diagonal's bound :math:`\delta`, :math:`|ecc^2 - \widetilde{ecc}^2| \le \delta_i +
+        \frac{1}{A_c}\sum_{j \in c} m_j\delta_j` plus the rounding of the sums, turned into a bound
+        of :math:`|ecc - \widetilde{ecc}|` by :func:`spectral_igl.distances.root_error`;
+        ``bound_kind`` and ``method`` of the diagonal.
+    **kwargs
+        Passed to :func:`spectral_igl.kernel_diagonal`.
+
+    Returns
+    -------
+    ecc : (n,) float
+        The eccentricity of every vertex.
+    info : dict
+        Only with ``return_info=True``.
+
+    Notes
+    -----
     .. math:: ecc(i)^2 = \frac{1}{A_c}\sum_{j \in c} m_j\, d^2(i, j)
               = G_{ii} + \frac{1}{A_c}\sum_{j\in c} m_j G_{jj} - \frac{2|\varphi(0)|^2}{A_c}
 
@@ -513,16 +686,18 @@ def eccentricity(lap, filt, method: str = "auto", return_info: bool = False, **k
     diagonal (no n² distances). For the diffusion filter it is the survey's
     :math:`ecc_t` (§5.1) up to the square root.
 
-    With ``return_info`` also ``info`` (:mod:`spectral_igl.accuracy`): ``abs_error`` (n,)
-    from the diagonal's bound :math:`\delta`, :math:`|ecc^2 - \widetilde{ecc}^2| \le \delta_i +
-    \frac{1}{A_c}\sum_{j \in c} m_j\delta_j` plus the rounding of the sums, turned into a bound
-    of :math:`|ecc - \widetilde{ecc}|` by :func:`spectral_igl.distances.root_error`;
-    ``bound_kind`` and ``method`` of the diagonal.
+    Examples
+    --------
+    The mean of the squared distances, computed from one diagonal instead of n distances:
 
-    Returns
-    -------
-    (n,) float
-    info : dict, only with ``return_info``
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> ecc = sig.eccentricity(lap, sig.filters.biharmonic())
+    >>> d = sig.biharmonic_distance(lap, 7)
+    >>> bool(abs(ecc[7] - np.sqrt(lap.mass @ d ** 2 / lap.mass.sum())) < 1e-6 * ecc[7])
+    True
     """
     lap = as_laplacian(lap)
     filt = check_filter(filt)
