@@ -94,7 +94,7 @@ class Filter:
         return hash(self.key)
 
     def at_zero(self):
-        """:math:`\varphi(0)`, with the convention :math:`\varphi(0) := 0` for singular filters."""
+        r""":math:`\varphi(0)`, with the convention :math:`\varphi(0) := 0` for singular filters."""
         if self.singular:
             return 0.0
         with np.errstate(all="ignore"):
@@ -151,7 +151,31 @@ class Filter:
 
 
 def as_filter(filt) -> Filter:
-    """Validate a filter argument: a :class:`Filter`, or a plain vectorised callable."""
+    r"""Validate a filter argument: a :class:`Filter`, or a plain vectorised callable.
+
+    Parameters
+    ----------
+    filt : Filter or callable
+        A callable ``fn(s)`` of an array of eigenvalues is wrapped as ``Filter(fn)``.
+
+    Returns
+    -------
+    Filter
+        ``filt`` itself when it is a Filter.
+
+    Raises
+    ------
+    TypeError
+        For anything else, naming what was received.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.as_filter(lambda s: 1.0 / (1.0 + s))
+    >>> float(f(np.array([1.0]))[0]), filters.as_filter(filters.heat(1.0)) == filters.heat(1.0)
+    (0.5, True)
+    """
     if isinstance(filt, Filter):
         return filt
     if callable(filt):
@@ -160,7 +184,32 @@ def as_filter(filt) -> Filter:
 
 
 def check_filter(filt) -> Filter:
-    """Validate a filter argument that must already be a :class:`Filter` (e.g. ``heat(t)``)."""
+    r"""Validate a filter argument that must already be a :class:`Filter` (e.g. ``heat(t)``).
+
+    Parameters
+    ----------
+    filt : Filter
+
+    Returns
+    -------
+    Filter
+        ``filt`` itself.
+
+    Raises
+    ------
+    TypeError
+        When ``filt`` is not a Filter (a plain callable included), naming what was received.
+
+    Examples
+    --------
+    >>> from spectral_igl import filters
+    >>> filters.check_filter(filters.biharmonic()) == filters.biharmonic()
+    True
+    >>> filters.check_filter(abs)
+    Traceback (most recent call last):
+    ...
+    TypeError: expected a spectral_igl.filters.Filter (e.g. filters.heat(t)), got ...
+    """
     if not isinstance(filt, Filter):
         raise TypeError("expected a spectral_igl.filters.Filter (e.g. filters.heat(t)), got " + describe(filt))
     return filt
@@ -169,12 +218,27 @@ def check_filter(filt) -> Filter:
 def heat(t) -> Filter:
     r"""Heat (diffusion) filter, :math:`\varphi(s) = e^{-ts}`.
 
-    .. math:: K_t = e^{-t\tilde L} B^{-1}
-
     Parameters
     ----------
     t : float
         Time, ``t > 0`` (physical time: no normalisation).
+
+    Returns
+    -------
+    Filter
+        Kind ``"heat"``; its square is ``heat(2 * t)``.
+
+    Notes
+    -----
+    .. math:: K_t = e^{-t\tilde L} B^{-1}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.heat(0.5)
+    >>> np.round(f([0.0, 2.0]), 6), f.square == filters.heat(1.0)
+    (array([1.      , 0.367879]), True)
     """
     t = as_positive(t, "t")
     return Filter(lambda s: np.exp(-t * s), name="heat", kind="heat", params={"t": t},
@@ -184,9 +248,29 @@ def heat(t) -> Filter:
 def wave(t) -> Filter:
     r"""Wave (Schrödinger) filter, :math:`\varphi(s) = e^{-ist}` (complex).
 
+    Parameters
+    ----------
+    t : float
+        Time of the propagator (real; physical time: no normalisation).
+
+    Returns
+    -------
+    Filter
+        Kind ``"wave"``, complex; its square is the constant filter 1.
+
+    Notes
+    -----
     .. math:: \varphi(\tilde L) f = \cos(t\tilde L) f - i \sin(t\tilde L) f
 
     Its modulus is 1, so ``.square`` is the constant filter 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.wave(np.pi / 2)
+    >>> np.round(f([0.0, 1.0]), 6), f.is_complex
+    (array([1.+0.j, 0.-1.j]), True)
     """
     t = as_positive(t, "t")
     return Filter(lambda s: np.exp(-1j * t * s), name="wave", is_complex=True, kind="wave",
@@ -204,7 +288,25 @@ def _power(p: float, name: str) -> Filter:
 def commute_time() -> Filter:
     r"""Commute-time filter, :math:`\varphi(s) = s^{-1/2}` (:math:`\varphi^2 = s^{-1}`), singular at 0.
 
+    Returns
+    -------
+    Filter
+        Kind ``"power"`` with ``p = 1/2``, singular: 0 on ker L.
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_{l \ge 2} \lambda_l^{-1} |x_l(i) - x_l(j)|^2
+
+    The filter is applied as a pseudo-inverse on the B-orthogonal complement of ker L
+    (:math:`\varphi(0) := 0` on the constants of each component).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.commute_time()
+    >>> np.round(f([0.0, 4.0]), 6), np.round(f.square([4.0]), 6)
+    (array([0. , 0.5]), array([0.25]))
     """
     return _power(0.5, "commute_time")
 
@@ -212,7 +314,25 @@ def commute_time() -> Filter:
 def biharmonic() -> Filter:
     r"""Biharmonic filter, :math:`\varphi(s) = s^{-1}` (:math:`\varphi^2 = s^{-2}`), singular at 0.
 
+    Returns
+    -------
+    Filter
+        Kind ``"power"`` with ``p = 1``, singular: 0 on ker L.
+
+    Notes
+    -----
     .. math:: d^2(i, j) = \sum_{l \ge 2} \lambda_l^{-2} |x_l(i) - x_l(j)|^2
+
+    Lipman et al.'s biharmonic distance (the survey's): the filter is applied as a
+    pseudo-inverse on the B-orthogonal complement of ker L.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.biharmonic()
+    >>> np.round(f([0.0, 4.0]), 6), f.singular
+    (array([0.  , 0.25]), True)
     """
     return _power(1.0, "biharmonic")
 
@@ -220,14 +340,30 @@ def biharmonic() -> Filter:
 def polyharmonic(k) -> Filter:
     r"""Poly-harmonic filter, :math:`\varphi(s) = s^{-k/2}`, singular at 0.
 
-    ``k = 1`` is commute-time, ``k = 2`` biharmonic.
-
-    .. math:: \varphi(\tilde L) = (\tilde L^+)^{k/2}
-
     Parameters
     ----------
     k : int
         Positive integer order.
+
+    Returns
+    -------
+    Filter
+        Kind ``"power"`` with ``p = k/2``, singular: 0 on ker L.
+
+    Notes
+    -----
+    ``k = 1`` is commute-time, ``k = 2`` biharmonic.
+
+    .. math:: \varphi(\tilde L) = (\tilde L^+)^{k/2}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> filters.polyharmonic(2) == filters.biharmonic()
+    True
+    >>> np.round(filters.polyharmonic(3)([4.0]), 6)
+    array([0.125])
     """
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, (numbers.Integral, np.integer)):
         raise TypeError(f"k must be a positive integer, got {describe(k)}")
@@ -239,12 +375,34 @@ def polyharmonic(k) -> Filter:
 def mexican_hat(t, form: str = "tse") -> Filter:
     r"""Mexican-hat filter (band-pass, 0 at s = 0), in one of two forms in use.
 
+    Parameters
+    ----------
+    t : float
+        Scale, ``t > 0``.
+    form : {"tse", "survey"}
+        Which of the two forms (see Notes).
+
+    Returns
+    -------
+    Filter
+        Zero at :math:`s = 0`.
+
+    Notes
+    -----
     ``form="tse"`` (default): :math:`\varphi(s) = t s\, e^{-ts}`, i.e.
     :math:`\varphi(\tilde L) = t \tilde L e^{-t\tilde L}`.
     ``form="survey"``: the survey's (Hou and Qin 2012) :math:`\varphi(s) = s^{1/2}e^{-s^2}`
     at scale ``t``,
 
     .. math:: \varphi_t(s) = (ts)^{1/2} e^{-(ts)^2}, \qquad |\varphi_t|^2(s) = ts\, e^{-2(ts)^2}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.mexican_hat(0.5)
+    >>> np.round(f([0.0, 2.0]), 6)
+    array([0.      , 0.367879])
     """
     t = as_positive(t, "t")
     if form == "survey":
@@ -268,13 +426,31 @@ def mexican_hat(t, form: str = "tse") -> Filter:
 def multiscale(t, k, alpha) -> Filter:
     r"""Multi-scale filter, :math:`\varphi(s) = t^k s^\alpha e^{-t s^\alpha}`.
 
-    .. math:: \varphi(\tilde L) = t^k \tilde L^\alpha e^{-t\tilde L^\alpha}
-
     Parameters
     ----------
-    t : float, > 0
-    k : float, >= 0
-    alpha : float, > 0
+    t : float
+        Scale, ``t > 0``.
+    k : float
+        Power of ``t`` in front, ``k >= 0``.
+    alpha : float
+        Power of :math:`s`, ``alpha > 0``.
+
+    Returns
+    -------
+    Filter
+        ``multiscale(t, 0, 1)`` is the heat filter's shape.
+
+    Notes
+    -----
+    .. math:: \varphi(\tilde L) = t^k \tilde L^\alpha e^{-t\tilde L^\alpha}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl import filters
+    >>> f = filters.multiscale(0.5, 1.0, 1.0)
+    >>> bool(np.allclose(f([0.0, 1.0, 3.0]), filters.mexican_hat(0.5)([0.0, 1.0, 3.0])))
+    True
     """
     t = as_positive(t, "t")
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, (numbers.Real, np.integer, np.floating)):
@@ -321,11 +497,28 @@ FILTERS = {
 
 
 def by_name(name: str, t: float | None = None, order: int = 3) -> Filter:
-    """The filter called ``name`` in :data:`FILTERS`, at time ``t`` (or of ``order``, poly-harmonic).
+    r"""The filter called ``name`` in :data:`FILTERS`, at time ``t`` (or of ``order``, poly-harmonic).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FILTERS`: ``"heat"``, ``"diffusion"`` (``heat(t / 2)``, whose square
+        defines the diffusion distance at ``t``), ``"wave"``, ``"mexican_hat"``,
+        ``"commute_time"``, ``"biharmonic"``, ``"polyharmonic"``.
+    t : float, optional
+        Time of the timed filters (required for them).
+    order : int
+        Order of ``"polyharmonic"`` (default 3).
+
+    Returns
+    -------
+    Filter
 
     Examples
     --------
     >>> by_name("diffusion", 0.2) == heat(0.1)
+    True
+    >>> by_name("polyharmonic", order=2) == biharmonic()
     True
     """
     if not isinstance(name, str) or name not in FILTERS:

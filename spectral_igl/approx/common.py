@@ -380,7 +380,7 @@ def _logt(t):
 
 
 def filter_d2(filt):
-    """``d2(lo, hi)``: a bound of :math:`|\varphi''|` on ``[lo, hi]`` (0 <= lo), or None
+    r"""``d2(lo, hi)``: a bound of :math:`|\varphi''|` on ``[lo, hi]`` (0 <= lo), or None
     for a filter without a known one."""
     kind, p = filt.kind, filt.params
     if kind == "heat":
