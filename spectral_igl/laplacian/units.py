@@ -39,7 +39,27 @@ _DIMENSION = {"triangle": 2, "polygon": 2, "points": 2, "tet": 3, "voxels": 3}
 
 
 def dimension(lap: Laplacian) -> int | None:
-    """Intrinsic dimension d of the domain: 2 for surfaces, 3 for solids, None without geometry."""
+    r"""Intrinsic dimension d of the domain: 2 for surfaces, 3 for solids, None without geometry.
+
+    Parameters
+    ----------
+    lap : Laplacian
+
+    Returns
+    -------
+    int or None
+        2 for triangle and polygon meshes and point clouds, 3 for tetrahedra, the mask's
+        dimension for voxels, ``None`` for a graph or a bare matrix.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.data_generators import box_tets
+    >>> from spectral_igl.laplacian.units import dimension
+    >>> dimension(sig.laplacian(*icosphere(1))), dimension(sig.laplacian(*box_tets((2, 2, 2))))
+    (2, 3)
+    """
     if lap.domain == "voxels":
         return int(np.asarray(lap.data["mask"]).ndim)
     return _DIMENSION.get(lap.domain)
@@ -69,7 +89,35 @@ def _edges(lap) -> np.ndarray:
 
 
 def mean_edge_length(lap: Laplacian) -> float:
-    """Mean length of the unique edges of the elements (or of the neighbour graph), cached."""
+    r"""Mean length :math:`h` of the unique edges of the elements (or of the neighbour graph), cached.
+
+    Parameters
+    ----------
+    lap : Laplacian
+        A Laplacian with vertex positions (meshes, point clouds).
+
+    Returns
+    -------
+    h : float
+        The unit of ``time_unit="h2"`` is :math:`h^2`.
+
+    Raises
+    ------
+    ValueError
+        When ``lap`` has no positions or no edge.
+
+    Examples
+    --------
+    The icosahedron's edge on the unit sphere is :math:`4/\sqrt{10 + 2\sqrt 5}`:
+
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> import numpy as np
+    >>> from spectral_igl.laplacian import mean_edge_length
+    >>> h = mean_edge_length(sig.laplacian(*icosphere(0)))
+    >>> bool(np.isclose(h, 4 / np.sqrt(10 + 2 * np.sqrt(5))))
+    True
+    """
     def build():
         P = _positions(lap)
         if P is None:
@@ -84,7 +132,34 @@ def mean_edge_length(lap: Laplacian) -> float:
 
 
 def time_scale(lap: Laplacian, unit: str = "shape") -> float:
-    """The absolute time that one unit of ``unit`` stands for on ``lap`` (see the module's table)."""
+    r"""The absolute time that one unit of ``unit`` stands for on ``lap`` (see the module's table).
+
+    Parameters
+    ----------
+    lap : Laplacian
+    unit : {"shape", "absolute", "area", "volume", "h2"}
+        Default ``"shape"``.
+
+    Returns
+    -------
+    float
+        1 for ``"absolute"``, the area :math:`A = 1^\top B 1` (surfaces) or the volume
+        :math:`V^{2/3}` (solids) for ``"shape"``, :math:`h^2` for ``"h2"``.
+
+    Notes
+    -----
+    A time has the units of a squared length: on a shape scaled by :math:`s` the eigenvalues
+    of :math:`B^{-1}L` scale by :math:`s^{-2}`, so :math:`t\,A^{2/d}` means the same on every
+    size.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> bool(sig.time_scale(lap) == lap.area()), sig.time_scale(lap, "absolute")
+    (True, 1.0)
+    """
     unit = as_choice(unit, "time_unit", TIME_UNITS)
     if unit == "absolute":
         return 1.0
@@ -104,9 +179,22 @@ def time_scale(lap: Laplacian, unit: str = "shape") -> float:
 
 
 def shape_time(lap: Laplacian, t, unit: str = "shape", name: str = "t"):
-    """The absolute time(s) for ``t`` given in ``unit``: ``t * time_scale(lap, unit)``.
+    r"""The absolute time(s) for ``t`` given in ``unit``: ``t * time_scale(lap, unit)``.
 
-    ``t`` is a positive number or an array of them (returned as a float or a float array).
+    Parameters
+    ----------
+    lap : Laplacian
+    t : float or array of float
+        Positive time(s) in the unit ``unit``.
+    unit : {"shape", "absolute", "area", "volume", "h2"}
+        Default ``"shape"`` (see :mod:`spectral_igl.laplacian.units`).
+    name : str
+        The argument's name in error messages.
+
+    Returns
+    -------
+    float or array of float
+        The absolute time(s) :math:`t \cdot` ``time_scale(lap, unit)``, shaped as ``t``.
 
     Examples
     --------
@@ -132,9 +220,36 @@ def shape_time(lap: Laplacian, t, unit: str = "shape", name: str = "t"):
 
 
 def optional_time(lap: Laplacian, t, unit: str, name: str = "t"):
-    """:func:`shape_time` for a time that may be omitted (``None``: the function's default).
+    r""":func:`shape_time` for a time that may be omitted (``None``: the function's default).
 
     A ``unit`` other than ``"absolute"`` with no time is refused rather than ignored.
+
+    Parameters
+    ----------
+    lap : Laplacian
+    t : None, float or array of float
+        The time(s) in ``unit``, or ``None``.
+    unit : {"absolute", "shape", "area", "volume", "h2"}
+    name : str
+        The argument's name in error messages.
+
+    Returns
+    -------
+    None, float or array of float
+        ``None`` for ``t=None``, else :func:`shape_time`.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.laplacian.units import optional_time
+    >>> lap = sig.laplacian(*icosphere(1))
+    >>> optional_time(lap, None, "absolute") is None, optional_time(lap, 0.5, "absolute")
+    (True, 0.5)
+    >>> optional_time(lap, None, "shape")
+    Traceback (most recent call last):
+    ...
+    ValueError: ...
     """
     unit = as_choice(unit, "time_unit", TIME_UNITS)
     if t is None:
