@@ -40,6 +40,20 @@ class Laplacian:
         stages, reused across calls (``lap.cache.clear()`` frees them, ``lap.cache.nbytes``
         reports their memory). Never stale: L and B are not to be modified after
         construction.
+
+    Examples
+    --------
+    Built by the domain constructors (:func:`spectral_igl.laplacian`, ...); rows of L sum to 0
+    and the mass sums to the area:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> lap.n, lap.n_components, lap.domain
+    (162, 1, 'triangle')
+    >>> bool(np.allclose(lap.L @ np.ones(lap.n), 0)), bool(np.isclose(lap.mass.sum(), lap.area()))
+    (True, True)
     """
 
     L: sp.csr_matrix
@@ -261,15 +275,49 @@ def _zero_row_sums(L: sp.csr_matrix) -> sp.csr_matrix:
 
 def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
                    adjacency: sp.spmatrix | None = None, *, _symmetric: bool = False) -> Laplacian:
-    """Build a :class:`Laplacian` from a stiffness ``L`` (PSD) and a mass ``B`` (SPD).
+    r"""Build a :class:`Laplacian` from a stiffness ``L`` (PSD) and a mass ``B`` (SPD).
 
     ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0; ``B``
     must be symmetric up to rounding (:data:`MASS_ASYMMETRY`), and both must be real.
     This is the one place where every constructor's matrices are normalised.
+    Parameters
+    ----------
+    L : (n, n) sparse or dense float
+        Stiffness, symmetric positive semi-definite up to rounding.
+    B : (n, n) sparse or dense float
+        Mass, symmetric positive definite.
+    domain : str
+        Label of the domain (default ``"matrix"``: no geometry).
+    data : dict, optional
+        What the domain was built from (``V``, ``F``, ...), kept as :attr:`Laplacian.data`.
+    adjacency : (n, n) sparse, optional
+        Connectivity giving the components (default: the nonzero pattern of ``L``).
+
+    Returns
+    -------
+    Laplacian
+
+    Notes
+    -----
     Components come from ``adjacency`` (e.g. the mesh's elements) when given, else from
     the nonzero pattern of ``L``; a cotangent weight that happens to be exactly zero
-    must not split a connected mesh. ``_symmetric=True`` is a constructor's promise that
-    ``L`` equals ``L.T`` entry for entry, so :math:`(L + L^T)/2 = L` needs no transpose.
+    must not split a connected mesh. A constructor that knows ``L``
+    equals ``L.T`` entry for entry says so with the keyword-only ``_symmetric=True``, so that
+    :math:`(L + L^T)/2 = L` needs no transpose.
+
+    .. math:: L \leftarrow \tfrac12 (L + L^\top), \qquad L_{ii} \leftarrow -\sum_{j \ne i} L_{ij}
+
+    Examples
+    --------
+    The path graph on three vertices with a lumped mass:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> L = np.array([[1.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
+    >>> lap = sig.make_laplacian(L, np.eye(3))
+    >>> lap.n, lap.n_components, np.round(sig.dense_eigs(lap)[0], 6)
+    (3, 1, array([0., 1., 3.]))
     """
     L, B = _real_matrix(L, "L"), _real_matrix(B, "B")
     L = _canonical(L) if _symmetric else _symmetrize(L)

@@ -18,10 +18,34 @@ __all__ = ["mass_ratio", "lambda_max", "lambda_max_kind", "entry_error"]
 def mass_ratio(lap: Laplacian) -> float:
     r"""A lower bound :math:`c \le \lambda_{\min}(D^{-1}B)`, D = diag(row sums of B).
 
+    Parameters
+    ----------
+    lap : Laplacian
+
+    Returns
+    -------
+    c : float
+        In (0, 1]; the kind of the bound is :func:`lambda_max_kind`.
+
+    Notes
+    -----
     1 for a diagonal B. For the consistent linear-FEM mass of triangles (tets) every
     element matrix satisfies :math:`B_e \ge D_e/4` (:math:`D_e/5`), hence :math:`B \ge D/4`
     (:math:`D/5`): a proof, not an estimate. Any other B gets a Lanczos estimate of
     :math:`\lambda_{\min}(D^{-1/2} B D^{-1/2})` lowered by 10%.
+
+    It enters :math:`\lambda_{\max}(B^{-1}L) \le \max_i (\sum_j |L_{ij}|) / (c\, D_{ii})` (Gershgorin)
+    and every per-entry bound (:func:`entry_error`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.laplacian import mass_ratio
+    >>> V, F = icosphere(1)
+    >>> mass_ratio(sig.laplacian(V, F)), mass_ratio(sig.laplacian(V, F, mass="full"))
+    (1.0, 0.25)
     """
     lap = as_laplacian(lap)
 
@@ -86,9 +110,28 @@ def lambda_max(lap: Laplacian) -> float:
 
 
 def lambda_max_kind(lap: Laplacian) -> str:
-    """``"proof"`` when :func:`lambda_max` is a proved bound (a diagonal B, or the consistent
-    linear-FEM mass of a triangle or tet mesh), ``"estimate"`` when its mass ratio is a
-    Lanczos estimate (any other non-diagonal B)."""
+    r"""Whether :func:`lambda_max` is a proof or an estimate.
+
+    Parameters
+    ----------
+    lap : Laplacian
+
+    Returns
+    -------
+    str
+        ``"proof"`` when :func:`lambda_max` is a proved bound (a diagonal B, or the consistent
+        linear-FEM mass of a triangle or tet mesh), ``"estimate"`` when its mass ratio is a
+        Lanczos estimate (any other non-diagonal B).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.laplacian import lambda_max_kind
+    >>> lambda_max_kind(sig.laplacian(*icosphere(1), mass="full"))
+    'proof'
+    """
     lap = as_laplacian(lap)
     if lap.lumped or (lap.domain in ("triangle", "tet") and lap.data.get("mass") == "full"):
         return "proof"
@@ -110,6 +153,18 @@ def entry_error(lap: Laplacian, bnorm_error) -> np.ndarray:
     Returns
     -------
     (n,) float for a scalar bound, (n, m) float for m bounds.
+
+    Examples
+    --------
+    With a lumped mass, :math:`c = 1` and the bound is :math:`\|e\|_B / \sqrt{m_j}`:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.laplacian import entry_error
+    >>> lap = sig.laplacian(*icosphere(1))
+    >>> bool(np.allclose(entry_error(lap, 1e-6), 1e-6 / np.sqrt(lap.mass)))
+    True
     """
     lap = as_laplacian(lap)
     b = np.asarray(bnorm_error, dtype=float)

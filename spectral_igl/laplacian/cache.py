@@ -69,13 +69,19 @@ def nbytes_of(obj) -> int:
 
 
 class Cache:
-    """Named slots of derived quantities of one Laplacian, each an LRU mapping.
+    r"""Named slots of derived quantities of one Laplacian, each an LRU mapping.
 
     The ``"factor"`` slot also has a byte budget (``factor_budget``, default
     :data:`BUDGET_FRACTION` of :func:`available_memory` when the cache is made): when the
     factorizations it holds exceed it, the least recently used are evicted until they fit
     (the newest entry is always kept). ``nbytes`` of each entry is exact for the package's
     LDLᵀ and SuperLU factors and an estimate for CHOLMOD's.
+
+    Parameters
+    ----------
+    factor_budget : int, optional
+        Bytes the ``"factor"`` slot may hold (default: :data:`BUDGET_FRACTION` of the
+        available memory).
 
     Examples
     --------

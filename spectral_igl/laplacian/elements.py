@@ -22,9 +22,28 @@ def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def element_measures(V, C=None) -> np.ndarray:
-    """(m,) area of each triangle or volume of each tetrahedron (unsigned).
+    r"""(m,) area of each triangle or volume of each tetrahedron (unsigned).
 
-    ``(V, C)`` are arrays, or ``V`` is a pyvista/trimesh/meshio mesh and ``C`` is omitted.
+    Parameters
+    ----------
+    V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``C`` omitted
+        Vertex positions (2-D positions are allowed for triangles).
+    C : (m, 3) or (m, 4) int, optional
+        Triangles or tetrahedra.
+
+    Returns
+    -------
+    (m,) float
+        :math:`\tfrac12 \|(v_1 - v_0) \times (v_2 - v_0)\|` per triangle,
+        :math:`\tfrac16 |\det(v_1 - v_0, v_2 - v_0, v_3 - v_0)|` per tetrahedron.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl.laplacian.mesh import element_measures
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    >>> element_measures(V, np.array([[0, 1, 2]])), element_measures(V, np.array([[0, 1, 2, 3]]))
+    (array([0.5]), array([0.16666667]))
     """
     V, C = as_mesh_arrays(V, C)
     V, C = np.asarray(V, dtype=float), np.asarray(C)

@@ -28,7 +28,37 @@ __all__ = ["as_laplacian"]
 
 
 def as_laplacian(x, name: str = "lap") -> Laplacian:
-    """A :class:`Laplacian` from a Laplacian, a ``(V, F)``/``(V, T)`` pair or a mesh object."""
+    r"""A :class:`Laplacian` from a Laplacian, a ``(V, F)``/``(V, T)`` pair or a mesh object.
+
+    Parameters
+    ----------
+    x : Laplacian, tuple or mesh
+        A Laplacian (returned as it is), a ``(V, F)`` triangle or ``(V, T)`` tetrahedral pair
+        of arrays, or a pyvista/trimesh/meshio mesh, built with the defaults of
+        :func:`spectral_igl.laplacian`.
+    name : str
+        The argument's name in error messages.
+
+    Returns
+    -------
+    Laplacian
+
+    Raises
+    ------
+    TypeError
+        For anything else, naming the argument and what it received.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.laplacian import as_laplacian
+    >>> V, F = icosphere(1)
+    >>> lap = as_laplacian((V, F))
+    >>> lap.n, as_laplacian(lap) is lap
+    (42, True)
+    """
     if isinstance(x, Laplacian):
         return x
     if isinstance(x, (tuple, list)) and len(x) == 2:

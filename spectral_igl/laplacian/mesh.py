@@ -22,14 +22,42 @@ MASSES = ("full", "lumped", "voronoi", "barycentric")
 
 
 def clean_mesh(V, C=None, rel_tol: float = 1e-12):
-    """Validate ``(V, C)`` and drop degenerate elements.
-
-    ``V`` may also be a pyvista/trimesh/meshio mesh, with ``C`` omitted.
+    r"""Validate ``(V, C)`` and drop degenerate elements.
 
     An element is degenerate when it repeats a vertex or its measure is at most
     ``rel_tol`` times the largest element measure: its cotangent weights would be
-    infinite or NaN. Returns ``(V, C_clean, dropped)`` with ``dropped`` the number
-    of elements removed. Raises ``ValueError`` if nothing is left.
+    infinite or NaN.
+
+    Parameters
+    ----------
+    V : (n, 3) float, or a pyvista/trimesh/meshio mesh with ``C`` omitted
+    C : (m, 3) or (m, 4) int, optional
+        Triangles or tetrahedra.
+    rel_tol : float
+        Relative measure below which an element is dropped (default 1e-12).
+
+    Returns
+    -------
+    V : (n, 3) float
+        The vertices, unchanged (unreferenced ones are kept).
+    C_clean : (k, 3) or (k, 4) int
+        The elements kept.
+    dropped : int
+        How many elements were removed.
+
+    Raises
+    ------
+    ValueError
+        When the arrays are malformed (naming which and how), or nothing is left.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl.laplacian.mesh import clean_mesh
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]])
+    >>> _, F, dropped = clean_mesh(V, np.array([[0, 1, 2], [0, 1, 3], [1, 1, 2]]))
+    >>> F.tolist(), dropped
+    ([[0, 1, 2]], 2)
     """
     V, C, dropped, _ = clean_mesh_with_measures(V, C, rel_tol)
     return V, C, dropped

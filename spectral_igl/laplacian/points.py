@@ -154,6 +154,18 @@ def tangent_voronoi_areas(P, k: int = 24) -> np.ndarray:
     Returns
     -------
     A : (n,) float, positive. Coincident points each get the full cell.
+
+    Examples
+    --------
+    On points spread evenly over the unit sphere the cells add up to about its area
+    :math:`4\pi`:
+
+    >>> import numpy as np
+    >>> from spectral_igl.data_generators import sphere_points
+    >>> from spectral_igl.laplacian.points import tangent_voronoi_areas
+    >>> A = tangent_voronoi_areas(sphere_points(500))
+    >>> A.shape, bool(abs(A.sum() / (4 * np.pi) - 1) < 0.05)
+    ((500,), True)
     """
     from scipy.spatial import cKDTree
 
