@@ -345,12 +345,38 @@ def _inertia(lap, mu):
 def dense_eigs(lap: Laplacian, k: int | None = None, max_n: int = 8000):
     r"""All (or the first ``k``) generalized eigenpairs by a dense solver: the ground truth.
 
-    ``scipy.linalg.eigh(L, B)``; the kernel is replaced by the exact B-normalised
-    component indicators. Refuses ``n > max_n`` (memory and time grow as n² and n³).
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+    k : int, optional
+        Number of pairs, the smallest first (default: all n).
+    max_n : int
+        Largest n accepted (default 8000): memory and time grow as n² and n³.
 
     Returns
     -------
-    evals : (k,) float ascending; evecs : (n, k) float with :math:`X^\top B X = I`
+    evals : (k,) float
+        Ascending, :math:`0 = \lambda_1 \le \lambda_2 \le \dots`, the c zeros of ker L exact.
+    evecs : (n, k) float
+        :math:`L x = \lambda B x` with :math:`X^\top B X = I`.
+
+    Notes
+    -----
+    ``scipy.linalg.eigh(L, B)``; the kernel is replaced by the exact B-normalised component
+    indicators, and the other eigenvectors are projected B-orthogonally to them. Any spectral
+    operator is then :math:`\varphi(\tilde L) = X \varphi(\Lambda) X^\top B`.
+
+    Examples
+    --------
+    The unit sphere's eigenvalues :math:`l(l+1)`, multiplicity :math:`2l+1`:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> lam, X = sig.dense_eigs(lap, k=9)
+    >>> np.round(lam, 1), bool(np.allclose(X.T @ lap.B @ X, np.eye(9)))
+    (array([0. , 2. , 2. , 2. , 6. , 6. , 6. , 6. , 6. ]), True)
     """
     lap = as_laplacian(lap)
     n, c = lap.n, lap.n_components
@@ -401,6 +427,18 @@ def negative_inertia(lap: Laplacian, mu: float):
 def lambda_min_positive(lap: Laplacian) -> float:
     r"""A lower bound of the smallest positive eigenvalue :math:`\lambda_{c+1}` of :math:`\tilde L`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+
+    Returns
+    -------
+    float
+        :math:`\mu \le \lambda_{c+1}`, with c the number of connected components; its kind is
+        ``spectral_igl.linalg.lambda_min_positive_kind(lap)``.
+
+    Notes
+    -----
     An estimate :math:`\hat\lambda` comes from shift-invert Lanczos with ker L deflated
     (:func:`eigs`; dense for small n). It is then certified by spectrum slicing: for
     :math:`\mu = 0.999\hat\lambda` (lowered until it succeeds), an :math:`LDL^\top`
@@ -531,15 +569,13 @@ def eigenvalue_bracket(lap: Laplacian, k: int, rtol: float = BRACKET_RTOL):
     r"""An interval :math:`[lo, hi]` holding :math:`\lambda_k`, the k-th smallest eigenvalue of
     :math:`\tilde L` (counted from 1, the zeros of ker L included), spectrum-free.
 
-    Spectrum slicing: the number of negative pivots of an :math:`LDL^\top` factorization of
-    :math:`L - \sigma B` is the number :math:`N(\sigma)` of eigenvalues below :math:`\sigma`
-    (Sylvester's law of inertia), so :math:`N(\sigma) < k` gives :math:`\lambda_k \ge \sigma`
-    and :math:`N(\sigma) \ge k` gives :math:`\lambda_k < \sigma`. The first shift is Weyl's law
-    (:math:`4\pi k / A` on a surface of area A), the next ones interpolate the counts as
-    :math:`N \propto \sigma^{d/2}` between the two ends of the bracket, until
-    :math:`hi \le (1 + rtol)\, lo`: a few factorizations, no eigenvector. Each end is moved
-    outwards by the count's backward error (how far rounding in the factorization moves the
-    pencil's eigenvalues). Cached on ``lap``.
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+    k : int
+        Which eigenvalue, from 1 (the zeros of ker L included).
+    rtol : float
+        Relative width of the bracket (default :data:`BRACKET_RTOL`).
 
     Returns
     -------
@@ -549,6 +585,18 @@ def eigenvalue_bracket(lap: Laplacian, k: int, rtol: float = BRACKET_RTOL):
     kind : str
         ``"proof"`` when every count that set an end succeeded, else ``"estimate"`` (the
         bracket then comes from Lanczos eigenvalues).
+
+    Notes
+    -----
+    Spectrum slicing: the number of negative pivots of an :math:`LDL^\top` factorization of
+    :math:`L - \sigma B` is the number :math:`N(\sigma)` of eigenvalues below :math:`\sigma`
+    (Sylvester's law of inertia), so :math:`N(\sigma) < k` gives :math:`\lambda_k \ge \sigma`
+    and :math:`N(\sigma) \ge k` gives :math:`\lambda_k < \sigma`. The first shift is Weyl's law
+    (:math:`4\pi k / A` on a surface of area A), the next ones interpolate the counts as
+    :math:`N \propto \sigma^{d/2}` between the two ends of the bracket, until
+    :math:`hi \le (1 + rtol)\, lo`: a few factorizations, no eigenvector. Each end is moved
+    outwards by the count's backward error (how far rounding in the factorization moves the
+    pencil's eigenvalues). Cached on ``lap``.
 
     Examples
     --------

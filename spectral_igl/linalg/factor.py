@@ -62,7 +62,42 @@ def check_backend(backend) -> str:
 
 
 class Factor:
-    """A factorized sparse matrix. ``solve(b)`` solves ``A x = b``."""
+    r"""A factorized sparse matrix. ``solve(b)`` solves ``A x = b``.
+
+    Parameters
+    ----------
+    A : (n, n) sparse matrix
+        Real or complex; symmetric positive definite unless ``spd=False``.
+    backend : {"auto", "cholespy", "pypardiso", "ldlt", "superlu"}
+        ``"auto"``: CHOLMOD (cholespy) for a real SPD matrix, SuperLU otherwise (and for
+        complex matrices). A backend that is not installed is refused with an ImportError naming
+        its ``pip install``.
+    spd : bool
+        Whether ``A`` is symmetric positive definite (default True).
+
+    Attributes
+    ----------
+    n : int
+    backend : str
+        The backend used.
+    nbytes : int
+        Memory held by the factors (exact for ``ldlt`` and SuperLU, an estimate for CHOLMOD).
+
+    Examples
+    --------
+    A complex shifted system, as the rational approximations solve, :math:`(L + zB)x = b`:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.linalg import Factor
+    >>> lap = sig.laplacian(*icosphere(1))
+    >>> A = (lap.L + (1 + 2j) * lap.B).tocsr()
+    >>> fac = Factor(A, spd=False)
+    >>> b = np.ones(lap.n)
+    >>> fac.backend, bool(np.allclose(A @ fac.solve(b), b))
+    ('superlu', True)
+    """
 
     def __init__(self, A: sp.spmatrix, backend: str = "auto", spd: bool = True):
         A = sp.csr_matrix(A)
@@ -127,5 +162,30 @@ class Factor:
 
 
 def factorize(A: sp.spmatrix, backend: str = "auto", spd: bool = True) -> Factor:
-    """Factorize a sparse square matrix; see :class:`Factor`."""
+    r"""Factorize a sparse square matrix; see :class:`Factor`.
+
+    Parameters
+    ----------
+    A : (n, n) sparse matrix
+        Real or complex; symmetric positive definite unless ``spd=False``.
+    backend : {"auto", "cholespy", "pypardiso", "ldlt", "superlu"}
+        ``"auto"``: CHOLMOD (cholespy) for a real SPD matrix, SuperLU otherwise.
+    spd : bool
+        Whether ``A`` is symmetric positive definite (default True).
+
+    Returns
+    -------
+    Factor
+        ``solve(b)`` solves :math:`A x = b` for (n,) or (n, k) ``b``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import scipy.sparse as sp
+    >>> from spectral_igl import linalg
+    >>> A = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
+    >>> x = linalg.factorize(A).solve(np.array([1.0, 2.0]))
+    >>> bool(np.allclose(A @ x, [1.0, 2.0]))
+    True
+    """
     return Factor(A, backend=backend, spd=spd)

@@ -139,7 +139,31 @@ def shifted_factor(lap: Laplacian, beta, theta=1.0, backend: str = "auto", keep:
 
 
 def mass_solve(lap: Laplacian, g: np.ndarray, backend: str = "auto") -> np.ndarray:
-    r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise)."""
+    r""":math:`B^{-1} g` (a division when B is diagonal, a cached Cholesky otherwise).
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+    g : (n,) or (n, k) float or complex
+    backend : str
+        Sparse solver for a non-diagonal B (see :func:`factorize`; default ``"auto"``).
+
+    Returns
+    -------
+    (n,) or (n, k)
+        :math:`B^{-1} g`, shaped as ``g``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl import linalg
+    >>> lap = sig.laplacian(*icosphere(1), mass="full")
+    >>> g = np.arange(lap.n, dtype=float)
+    >>> bool(np.allclose(lap.B @ linalg.mass_solve(lap, g), g))
+    True
+    """
     lap = as_laplacian(lap)
     g = as_signal(g, lap.n, "g", max_magnitude=np.inf)   # also the engine's intermediate vectors
     backend = check_backend(backend)
@@ -213,6 +237,21 @@ def pseudo_solve(lap: Laplacian, g, backend: str = "auto") -> np.ndarray:
     Returns
     -------
     u : same shape as ``g``
+
+    Examples
+    --------
+    :math:`u = \tilde L^+ f` solves :math:`\tilde L u = f` for an ``f`` of mean zero, and has
+    mean zero:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl import linalg
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> f = lap.data["V"][:, 2]            # z: B-orthogonal to the constants on the sphere
+    >>> u = linalg.pseudo_solve(lap, lap.B @ f)
+    >>> bool(np.allclose(lap.L @ u, lap.B @ f)), bool(abs(lap.mass @ u) < 1e-10)
+    (True, True)
     """
     lap = as_laplacian(lap)
     g = as_signal(g, lap.n, "g")
@@ -226,5 +265,30 @@ def pseudo_solve(lap: Laplacian, g, backend: str = "auto") -> np.ndarray:
 
 
 def clear_cache(lap: Laplacian) -> None:
-    """Drop everything cached on ``lap`` (the same as ``lap.cache.clear()``)."""
+    r"""Drop everything cached on ``lap`` (the same as ``lap.cache.clear()``).
+
+    Factorizations, spectral bounds and eigenpairs are cached on the Laplacian and reused
+    by every later call on it; this frees their memory.
+
+    Parameters
+    ----------
+    lap : Laplacian
+
+    Returns
+    -------
+    None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl import linalg
+    >>> lap = sig.laplacian(*icosphere(1))
+    >>> _ = sig.lambda_max(lap)
+    >>> len(lap.cache) > 0
+    True
+    >>> linalg.clear_cache(lap); len(lap.cache)
+    0
+    """
     as_laplacian(lap).cache.clear()
