@@ -375,8 +375,8 @@ def dense_eigs(lap: Laplacian, k: int | None = None, max_n: int = 8000):
     >>> from spectral_igl.data_generators import icosphere
     >>> lap = sig.laplacian(*icosphere(3))
     >>> lam, X = sig.dense_eigs(lap, k=9)
-    >>> np.round(lam, 1), bool(np.allclose(X.T @ lap.B @ X, np.eye(9)))
-    (array([0. , 2. , 2. , 2. , 6. , 6. , 6. , 6. , 6. ]), True)
+    >>> np.round(lam, 1).tolist(), bool(np.allclose(X.T @ lap.B @ X, np.eye(9)))
+    ([0.0, 2.0, 2.0, 2.0, 6.0, 6.0, 6.0, 6.0, 6.0], True)
     """
     lap = as_laplacian(lap)
     n, c = lap.n, lap.n_components
