@@ -500,11 +500,25 @@ def _available_memory() -> int | None:
 
 
 def memory_budget() -> int:
-    """Bytes that one dense allocation or dense eigenproblem may take.
+    r"""Bytes that one dense allocation or dense eigenproblem may take.
 
     In order: :func:`set_memory_budget`, the environment variable
     ``SPECTRAL_IGL_MEMORY_BUDGET`` (bytes), a quarter of ``MemAvailable`` in
     ``/proc/meminfo``, or 2 GiB.
+
+    Returns
+    -------
+    int
+        Bytes.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> sig.set_memory_budget(2**30)
+    >>> sig.memory_budget()
+    1073741824
+    >>> sig.set_memory_budget(None); sig.memory_budget() > 0
+    True
     """
     import os
 
@@ -524,7 +538,20 @@ def memory_budget() -> int:
 
 
 def set_memory_budget(nbytes) -> None:
-    """Set the bytes one dense allocation may take (``None``: back to the automatic budget).
+    r"""Set the bytes one dense allocation may take (``None``: back to the automatic budget).
+
+    A dense computation (dense eigenpairs, pairwise distance matrices, ...) that would need
+    more is refused with a ValueError naming the size and a spectrum-free alternative.
+
+    Parameters
+    ----------
+    nbytes : int or None
+        Positive number of bytes, or ``None`` for the automatic budget
+        (:func:`memory_budget`).
+
+    Returns
+    -------
+    None
 
     Examples
     --------

@@ -38,8 +38,25 @@ BOUND_KINDS = ("proof", "estimate")
 
 
 class AccuracyWarning(RuntimeWarning):
-    """A result's error bound exceeds the tolerance that was asked for (or is only an estimate
-    where a proof was asked for)."""
+    r"""A result's error bound exceeds the tolerance that was asked for (or is only an estimate
+    where a proof was asked for).
+
+    A :class:`RuntimeWarning`: the result is returned with its bound in ``info``; turn the
+    warning into an error to refuse such results.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from spectral_igl.accuracy import AccuracyWarning
+    >>> issubclass(AccuracyWarning, RuntimeWarning)
+    True
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("error", AccuracyWarning)   # a missed tolerance raises
+    ...     warnings.warn("bound 1e-6 > tol 1e-8", AccuracyWarning)
+    Traceback (most recent call last):
+    ...
+    spectral_igl.accuracy.AccuracyWarning: bound 1e-6 > tol 1e-8
+    """
 
 
 # every miss is reported, not only the first one at a given line
@@ -47,8 +64,17 @@ warnings.filterwarnings("always", category=AccuracyWarning)
 
 
 def weakest(*kinds):
-    """The kind of a bound built from parts of these kinds: ``None`` if any part has no bound,
+    r"""The kind of a bound built from parts of these kinds: ``None`` if any part has no bound,
     ``"estimate"`` if any part is an estimate, else ``"proof"``.
+
+    Parameters
+    ----------
+    *kinds : {"proof", "estimate", None}
+        The kinds of the parts' bounds.
+
+    Returns
+    -------
+    {"proof", "estimate", None}
 
     Examples
     --------
@@ -81,6 +107,18 @@ def warn_missed(what: str, bound, target, stacklevel: int = 3) -> bool:
 def relative_error(values, abs_error):
     r"""Per-entry bound of :math:`|x - \tilde x| / |x|` from :math:`|x - \tilde x| \le e`:
     :math:`e / (|\tilde x| - e)` where :math:`|\tilde x| > e`, :math:`\infty` elsewhere.
+
+    Parameters
+    ----------
+    values : array_like
+        The computed :math:`\tilde x`.
+    abs_error : array_like
+        Bounds :math:`e` of :math:`|x - \tilde x|`, broadcast against ``values``.
+
+    Returns
+    -------
+    ndarray of float
+        The relative bounds, shaped as the broadcast of the two.
 
     Examples
     --------

@@ -20,7 +20,7 @@ _TRI = (".obj", ".off", ".ply", ".stl", ".wrl")
 
 
 def read_mesh(path, polygons: bool = False):
-    """Read a mesh file.
+    r"""Read a mesh file.
 
     Parameters
     ----------
@@ -48,6 +48,19 @@ def read_mesh(path, polygons: bool = False):
     ValueError
         The extension is not supported, or the file holds no valid mesh; a malformed file
         (see :func:`check_mesh_file`) is refused with its name and line.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.io import read_mesh, write_mesh
+    >>> V, F = icosphere(1)
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "sphere.obj"
+    >>> write_mesh(path, V, F)
+    >>> V2, F2 = read_mesh(path)
+    >>> V2.shape, F2.shape, bool(np.allclose(V2, V))
+    ((42, 3), (80, 3), True)
     """
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")
@@ -142,7 +155,7 @@ _FIELD_FORMATS = (".vtu", ".vtk", ".ply")
 
 
 def write_mesh(path, V, F=None, fields=None) -> None:
-    """Write a mesh, with per-vertex fields as point data.
+    r"""Write a mesh, with per-vertex fields as point data.
 
     Parameters
     ----------
@@ -162,6 +175,10 @@ def write_mesh(path, V, F=None, fields=None) -> None:
         letters, digits, ``_``, ``.``, ``-``, ``+`` and ``=`` become ``_``; a field called
         ``x``, ``y`` or ``z`` is written as ``x_`` (and so on), since those name the
         coordinates.
+
+    Returns
+    -------
+    None
 
     Raises
     ------
@@ -450,13 +467,41 @@ _CHECKS = {".obj": _check_obj, ".off": _check_off, ".ply": _check_ply, ".stl": _
 
 
 def check_mesh_file(path) -> None:
-    """Check the structure of a mesh file before a C++ reader sees it.
+    r"""Check the structure of a mesh file before a C++ reader sees it.
 
     Headers that claim more elements than the file can hold, truncated or out-of-range
     face lines (OBJ, OFF), binary data in a text format, and an OBJ file without vertex or
     face lines raise a ``ValueError`` naming the file and the line, instead of a silent
     drop, an echo of the bytes or an allocation failure inside the reader; so do a
     directory, a missing file and an unsupported extension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file with one of the extensions :func:`read_mesh` reads.
+
+    Returns
+    -------
+    None
+        The file passed the checks.
+
+    Raises
+    ------
+    ValueError
+        A malformed file (naming it and the line), a directory or an unsupported extension.
+    FileNotFoundError
+        The file does not exist.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from spectral_igl.io import check_mesh_file
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "bad.off"
+    >>> _ = path.write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n")
+    >>> check_mesh_file(path)
+    Traceback (most recent call last):
+    ...
+    ValueError: ...
     """
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path must be a str or os.PathLike, got {type(path).__name__}")

@@ -259,11 +259,14 @@ def spectral_kernel(lap: Laplacian, filt, sources, delta: str = "mass", method: 
     method : str
         Approximation method of the engine (``"auto"``, ``"rational"``, ``"dense"``, ...).
     {accuracy}
+
     Returns
     -------
-    K : (n,) float for a single source, (n, m) float for m sources (complex for a
-        complex filter such as the wave kernel).
-    info : dict, only with ``return_info`` (entries shaped as ``K``)
+    K : (n,) or (n, m) float
+        One column for a single source, (n, m) for m sources (complex for a complex filter
+        such as the wave kernel).
+    info : dict
+        Only with ``return_info=True`` (entries shaped as ``K``).
 
     Examples
     --------
@@ -285,6 +288,34 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
                 floor: float = FLOOR, time_unit: str = "absolute"):
     r"""Columns of the heat kernel :math:`K_t = e^{-t\tilde L}B^{-1}`.
 
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+        The shape (anything :func:`~spectral_igl.laplacian.as_laplacian` takes).
+    t : float
+        Time, :math:`t > 0`, in the units ``time_unit``.
+    sources : int or (m,) int
+        Vertex index, or indices, of the kernel's source points.
+    delta : {"mass", "seed"}
+        ``"mass"`` (default): the discrete delta :math:`B^{-1}e_i`, convergent under
+        refinement; ``"seed"``: :math:`e_i` (mesh dependent, see :func:`spectral_kernel`).
+    method : str
+        Approximation method of the engine (``"auto"``, ``"rational"``, ``"dense"``, ...).
+    {accuracy}
+    time_unit : str
+        ``"absolute"`` (default), or ``t`` in the shape's units
+        (:mod:`spectral_igl.laplacian.units`).
+
+    Returns
+    -------
+    K : (n,) or (n, m) float
+        The column :math:`K_t(:, i)` for one source, (n, m) for m sources.
+    info : dict
+        Only with ``return_info=True`` (entries shaped as ``K``); ``info["time"]`` is the
+        absolute time used.
+
+    Notes
+    -----
     .. math:: K_t(:, i) = e^{-t \tilde L} B^{-1} e_i = \sum_l e^{-t\lambda_l} x_l(i)\, x_l
 
     ``t`` is in the units ``time_unit`` (:mod:`spectral_igl.laplacian.units`): the default
@@ -293,8 +324,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     same on a scan in millimetres and on the unit sphere; ``"h2"`` by the squared mean edge
     length. ``info["time"]`` is the absolute time used. On a Metzler operator (lumped mass and
     non-negative weights: :attr:`Laplacian.is_metzler`) the exact kernel is non-negative and
-    so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
-    source, (n, m) for m sources.
+    so is the returned one.
 
     Examples
     --------
@@ -327,7 +357,8 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     return out
 
 
-spectral_kernel.__doc__ = spectral_kernel.__doc__.replace("    {accuracy}\n", _ACCURACY_DOC.lstrip("\n"))
+for _fn in (spectral_kernel, heat_kernel):
+    _fn.__doc__ = _fn.__doc__.replace("    {accuracy}\n", _ACCURACY_DOC.lstrip("\n"))
 
 
 #: from this many sources on, ``method="auto"`` heat columns use the common-pole block solves

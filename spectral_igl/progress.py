@@ -21,12 +21,17 @@ _DEFAULT = contextvars.ContextVar("spectral_igl_progress", default=False)
 
 @contextlib.contextmanager
 def enabled(on: bool = True):
-    """Within this context, calls given ``progress=None`` draw their bars (or not).
+    r"""Within this context, calls given ``progress=None`` draw their bars (or not).
 
     Parameters
     ----------
     on : bool
         Whether ``progress=None`` means on inside the context.
+
+    Yields
+    ------
+    None
+        A context; the previous default comes back on leaving it.
 
     Examples
     --------
@@ -44,7 +49,22 @@ def enabled(on: bool = True):
 
 
 class NoProgress:
-    """A silent stand-in for a tqdm bar: every method does nothing."""
+    r"""A silent stand-in for a tqdm bar: every method does nothing.
+
+    What :func:`progress_bar` returns when bars are off, so that callers update a bar without
+    asking whether there is one.
+
+    Examples
+    --------
+    >>> from spectral_igl import progress
+    >>> bar = progress.progress_bar(10, "work", enable=False)
+    >>> isinstance(bar, progress.NoProgress)
+    True
+    >>> with bar:
+    ...     bar.update(3)
+    >>> bar.n
+    0
+    """
 
     total = 0
     n = 0

@@ -129,6 +129,9 @@ def _has_section(doc: str, *titles: str) -> bool:
 
 
 def _parameters(obj) -> list[str]:
+    if inspect.isclass(obj) and not any("__init__" in vars(c) for c in obj.__mro__
+                                        if c.__module__ != "builtins"):
+        return []     # an exception or a plain class: built-in arguments only
     target = obj.__init__ if inspect.isclass(obj) else obj
     try:
         sig = inspect.signature(target)
