@@ -19,10 +19,39 @@ KDEFL = 100
 
 
 def distance_colouring(lap, distance: int = 2, order: str = "bfs") -> np.ndarray:
-    """(n,) greedy colouring in which two vertices of one colour are more than ``distance``
+    r"""(n,) greedy colouring in which two vertices of one colour are more than ``distance``
     edges apart in the graph of the nonzeros of L (a distance-``distance`` colouring).
 
     The number of colours is about the number of vertices in a ball of ``distance`` rings.
+    Probing (:func:`spectral_igl.kernel_diagonal` with ``method="probing"``) applies the
+    kernel to one indicator per colour, :math:`K(i,i) \approx (K \sum_{j \in c(i)} e_j)_i`,
+    exact up to the kernel's entries more than ``distance`` rings away.
+
+    Parameters
+    ----------
+    lap : Laplacian or mesh
+    distance : int
+        Rings of separation (default 2), at least 1.
+    order : {"bfs", "natural"}
+        Order in which the greedy colouring visits the vertices.
+
+    Returns
+    -------
+    colours : (n,) int
+        Colour of every vertex, from 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> import scipy.sparse as sp
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> c = sig.distance_colouring(lap, distance=1)
+    >>> A = sp.coo_matrix(lap.L)
+    >>> off = A.row != A.col
+    >>> bool(np.all(c[A.row[off]] != c[A.col[off]])), int(c.max()) + 1 < 20
+    (True, True)
     """
     lap = as_laplacian(lap)
     n = lap.n
