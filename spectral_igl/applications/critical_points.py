@@ -14,7 +14,9 @@ __all__ = ["CriticalPoints", "critical_points"]
 
 @dataclass(frozen=True)
 class CriticalPoints:
-    """Minima, maxima and saddles of a piecewise-linear function.
+    r"""Minima, maxima and saddles of a piecewise-linear function.
+
+    What :func:`critical_points` returns. Items can also be read as keys: ``cp["minima"]``.
 
     Attributes
     ----------
@@ -31,7 +33,20 @@ class CriticalPoints:
     nonmanifold : (k,) int
         Vertices whose link is neither a cycle nor a path.
 
-    Items can also be read as keys: ``cp["minima"]``.
+    Examples
+    --------
+    The height on a sphere: one minimum, one maximum, no saddle, and the Morse count
+    :math:`m - s + M` is the sphere's Euler characteristic 2:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(2)
+    >>> cp = sig.critical_points(V, F, V[:, 2])
+    >>> len(cp.minima), len(cp.maxima), len(cp.saddles), cp.euler_characteristic()
+    (1, 1, 0, 2.0)
+    >>> bool(np.array_equal(cp["minima"], cp.minima))
+    True
     """
 
     minima: np.ndarray

@@ -385,6 +385,20 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
     (n,) float
         ``inf`` exactly on the vertices of connected components that hold no source (e.g.
         vertices no face references): no path reaches them.
+
+    Examples
+    --------
+    Against great-circle distances on the unit sphere (642 vertices):
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> V = lap.data["V"] / np.linalg.norm(lap.data["V"], axis=1, keepdims=True)
+    >>> exact = np.arccos(np.clip(V @ V[0], -1.0, 1.0))
+    >>> d = sig.geodesic_distance(lap, 0)
+    >>> float(d[0]), bool(np.mean(np.abs(d - exact)) < 0.03 * np.mean(exact))
+    (0.0, True)
     """
     lap_or_mesh, source, method = _libigl_order(lap_or_mesh, source, method)
     if not isinstance(method, str) or method not in ("heat", "varadhan"):
@@ -467,6 +481,21 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     (no time resolves the first rings: there :math:`d^2/4t < 1/4` already at
     :math:`t = 4h^2`), :math:`[2h, 5h)` 3% to 44%, :math:`[5h, 10h)` 2% to 9%, beyond
     :math:`10h` 1% to 8%.
+
+    Examples
+    --------
+    Against great-circle distances on the unit sphere (642 vertices): finite everywhere, a
+    few percent off on average:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> V = lap.data["V"] / np.linalg.norm(lap.data["V"], axis=1, keepdims=True)
+    >>> exact = np.arccos(np.clip(V @ V[0], -1.0, 1.0))
+    >>> d = sig.varadhan_distance(lap, 0)
+    >>> float(d[0]), bool(np.all(np.isfinite(d))), bool(np.mean(np.abs(d - exact)) < 0.1 * np.mean(exact))
+    (0.0, True, True)
     """
     lap = _as_laplacian(lap_or_mesh)
     src = as_indices(source, lap.n, "source")

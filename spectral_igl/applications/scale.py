@@ -84,6 +84,20 @@ class HeatFamily:
         of the shift-and-invert basis, over all columns); estimates, not bounds.
     t_split : float
         Times up to this use the polynomial basis.
+
+    Examples
+    --------
+    Any time from the same two bases, against the engine:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.applications import HeatFamily
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> X = lap.data["V"][:, [2]]
+    >>> hf = HeatFamily(lap, X)
+    >>> bool(np.allclose(hf.apply(0.3), sig.apply_filter(lap, sig.filters.heat(0.3), X), atol=1e-8))
+    True
     """
 
     def __init__(self, lap, X, tau=None, k_poly: int = 24, k_si: int = 48):
@@ -269,6 +283,23 @@ def optimal_time(lap, f, ts=None, n_times: int = 48, rule: str = "risk", probes:
     Cost (``method="auto"``): two factorizations and 72 block solves of ``1 + probes``
     columns for all the times together; 0.7-1.0 s CPU = 16-24 cholespy factorizations
     of :math:`B + tL` on the 10k-vertex rocker-arm (``--cost rocker-arm``, three runs).
+
+    Examples
+    --------
+    Height on a sphere plus white noise of 0.3: the chosen time removes most of it:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> z = lap.data["V"][:, 2]
+    >>> f = z + 0.3 * np.random.default_rng(0).standard_normal(lap.n)
+    >>> t, curve = sig.optimal_time(lap, f)
+    >>> g = sig.diffusion_smooth(lap, f, t)
+    >>> bool(np.sqrt(np.mean((g - z) ** 2)) < 0.5 * np.sqrt(np.mean((f - z) ** 2)))
+    True
+    >>> sorted(curve)
+    ['curvature', 'energy', 'noise', 'residual', 'risk', 't']
     """
     lap = as_laplacian(lap)
     f = as_signal(f, lap.n, "f", allow_complex=False)
@@ -376,6 +407,19 @@ def shape_noise(V, F) -> float:
     Returns
     -------
     float
+
+    Examples
+    --------
+    Noise of 0.01 along the normals of a sphere is found within a few tens of percent:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.applications import shape_noise
+    >>> V, F = icosphere(3)
+    >>> noisy = V * (1 + 0.01 * np.random.default_rng(1).standard_normal(len(V)))[:, None]
+    >>> bool(0.007 < shape_noise(noisy, F) < 0.013), bool(shape_noise(V, F) < 0.002)
+    (True, True)
     """
     import igl
     import scipy.sparse as sp
@@ -442,6 +486,17 @@ def optimal_shape_time(lap, **kwargs):
     t : float
     sigma : float
         The estimated normal noise (:func:`shape_noise`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(2)
+    >>> noisy = V + 0.02 * np.random.default_rng(0).standard_normal(V.shape)
+    >>> t, sigma = sig.optimal_shape_time(sig.laplacian(noisy, F))
+    >>> bool(t > 0), bool(0.005 < sigma < 0.05)
+    (True, True)
     """
     lap = as_laplacian(lap)
     if lap.domain != "triangle" or "V" not in lap.data or "F" not in lap.data:

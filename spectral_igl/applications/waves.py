@@ -31,6 +31,19 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
     (n,) or (n, k) complex
         The propagator is unitary in the B-inner product:
         :math:`\|H(t)\|_B = \|h\|_B` for every ``t``.
+
+    Examples
+    --------
+    The propagator keeps the B-norm:
+
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(2))
+    >>> h = lap.data["V"][:, 2]
+    >>> H = sig.schrodinger(lap, h, 0.7)
+    >>> bool(np.isclose(np.sqrt(np.real(np.conj(H) @ (lap.B @ H))), np.sqrt(h @ lap.B @ h)))
+    True
     """
     import numbers
 
