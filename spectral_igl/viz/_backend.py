@@ -38,11 +38,22 @@ def headless() -> bool:
 
 
 def display_available() -> bool:
-    """Whether an on-screen window can be opened.
+    r"""Whether an on-screen window can be opened.
 
     Linux: ``WAYLAND_DISPLAY`` is trusted; ``DISPLAY`` is tried (``XOpenDisplay`` through
     libX11 when the library is present), so that a stale or unreachable ``DISPLAY`` counts
     as no display. Other systems: True.
+
+    Returns
+    -------
+    bool
+        Without a display, pictures are rendered off screen (to files or a notebook).
+
+    Examples
+    --------
+    >>> from spectral_igl import viz
+    >>> isinstance(viz.display_available(), bool)
+    True
     """
     if not sys.platform.startswith("linux"):
         return True
@@ -103,12 +114,28 @@ def pyplot():
 
 
 def colormap(name):
-    """A matplotlib colormap by meaning or by name.
+    r"""A matplotlib colormap by meaning or by name.
 
     ``"distance"`` / ``"sequential"``: viridis, perceptually uniform, dark blue (minimum)
     to yellow (maximum), for non-negative quantities; ``"diverging"``: blue - white - red, for signed quantities (drawn with a
     range centred at 0); ``"cyclic"``: the hue circle, for periodic data only; any other
     string is a matplotlib colormap name; a ``Colormap`` is returned as is.
+
+    Parameters
+    ----------
+    name : str or matplotlib.colors.Colormap
+        ``"distance"``, ``"sequential"``, ``"diverging"``, ``"cyclic"``, a matplotlib name, or
+        a Colormap.
+
+    Returns
+    -------
+    matplotlib.colors.Colormap
+
+    Examples
+    --------
+    >>> from spectral_igl import viz
+    >>> viz.colormap("distance").name, viz.colormap("magma").name
+    ('viridis', 'magma')
     """
     pyplot()
     from matplotlib.colors import Colormap, LinearSegmentedColormap
@@ -133,15 +160,30 @@ def colormap(name):
 
 
 def color_kind(values, kind="auto", rtol=1e-6):
-    """How to read ``values``: ``"sequential"`` or ``"diverging"`` (or ``"cyclic"`` if asked).
+    r"""How to read ``values``: ``"sequential"`` or ``"diverging"`` (or ``"cyclic"`` if asked).
 
     ``"auto"``: diverging when the values take both signs beyond ``rtol`` times their
     largest magnitude (rounding-level negative values of a non-negative kernel do not
     count), sequential otherwise. ``"distance"`` is sequential. A matplotlib name is read
     as sequential.
 
+    Parameters
+    ----------
+    values : array_like
+        The values to draw.
+    kind : str
+        ``"auto"`` (default), ``"sequential"``, ``"diverging"``, ``"cyclic"``, ``"distance"`` or a
+        matplotlib colormap name.
+    rtol : float
+        Negative values down to ``-rtol`` times the largest magnitude count as zero.
+
+    Returns
+    -------
+    {"sequential", "diverging", "cyclic"}
+
     Examples
     --------
+    >>> from spectral_igl.viz import color_kind
     >>> color_kind([0.0, 1.0, 2.0]), color_kind([-1.0, 2.0]), color_kind([-1e-12, 1.0])
     ('sequential', 'diverging', 'sequential')
     """
@@ -158,7 +200,7 @@ def color_kind(values, kind="auto", rtol=1e-6):
 
 
 def to_pyvista(shape):
-    """Convert a shape to a pyvista dataset.
+    r"""Convert a shape to a pyvista dataset.
 
     Parameters
     ----------
@@ -171,6 +213,17 @@ def to_pyvista(shape):
     -------
     mesh : pyvista.PolyData or pyvista.UnstructuredGrid
     kind : {"triangle", "tet", "points"}
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl import viz
+    >>> from spectral_igl.data_generators import icosphere
+    >>> mesh, kind = viz.to_pyvista(icosphere(1))
+    >>> mesh.n_points, mesh.n_cells, kind
+    (42, 80, 'triangle')
+    >>> viz.to_pyvista(sig.laplacian(*icosphere(1)))[1]
+    'triangle'
     """
     pv = pyvista()
 
@@ -207,11 +260,38 @@ def to_pyvista(shape):
 
 
 def save_png(image, path, max_colors: int | None = None, optimize: bool = False):
-    """Write an RGB image array to ``path`` as a PNG.
+    r"""Write an RGB image array to ``path`` as a PNG.
 
     With ``max_colors`` the image is quantised to an adaptive palette (smaller files,
     at the price of some banding in smooth gradients). ``optimize`` spends several times
     longer on the compression for files about 10% smaller.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        RGB pixels (a pyvista screenshot).
+    path : str or os.PathLike
+    max_colors : int, optional
+        Size of the adaptive palette (default: full colour).
+    optimize : bool
+        Slower, smaller compression.
+
+    Returns
+    -------
+    path
+        ``path`` as given.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from PIL import Image
+    >>> from spectral_igl import viz
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "ramp.png"
+    >>> ramp = np.repeat(np.linspace(0, 255, 64, dtype=np.uint8)[None, :, None], 8, axis=0).repeat(3, 2)
+    >>> viz.save_png(ramp, path, max_colors=16) == path
+    True
+    >>> Image.open(path).size, len(Image.open(path).convert("RGB").getcolors())
+    ((64, 8), 16)
     """
     from PIL import Image
 

@@ -14,16 +14,32 @@ _VOLUME = ("boundary", "clip", "slices", "isosurfaces")
 
 
 def levelset_values(vmin: float, vmax: float, n_levels: int, log: bool = False) -> np.ndarray:
-    """``n_levels`` iso-values uniformly sampled inside ``(vmin, vmax)`` (end points excluded).
+    r"""``n_levels`` iso-values uniformly sampled inside ``(vmin, vmax)`` (end points excluded).
 
     With ``log`` they are uniform in the logarithm (geometric), as on a logarithmic colour
     scale.
 
+    Parameters
+    ----------
+    vmin, vmax : float
+        The range of the values (``vmin > 0`` with ``log``).
+    n_levels : int
+        Number of iso-values.
+    log : bool
+        Geometric instead of uniform spacing.
+
+    Returns
+    -------
+    (n_levels,) float
+        :math:`v_k = v_{min} + \frac{k}{n+1}(v_{max} - v_{min})`, :math:`k = 1..n` (with ``log``
+        the same in :math:`\log v`).
+
     Examples
     --------
-    >>> levelset_values(0.0, 1.0, 3)
+    >>> from spectral_igl import viz
+    >>> viz.levelset_values(0.0, 1.0, 3)
     array([0.25, 0.5 , 0.75])
-    >>> levelset_values(1e-3, 1e1, 3, log=True)
+    >>> viz.levelset_values(1e-3, 1e1, 3, log=True)
     array([0.01, 0.1 , 1.  ])
     """
     if n_levels < 0:
@@ -61,7 +77,7 @@ def _critical_sets(critical):
 
 
 def reached_vertices(mesh, sources=None):
-    """Vertices in the connected components that contain a source.
+    r"""Vertices in the connected components that contain a source.
 
     Parameters
     ----------
@@ -73,6 +89,19 @@ def reached_vertices(mesh, sources=None):
     Returns
     -------
     (n,) bool
+
+    Examples
+    --------
+    A shape of two spheres: the sources' component only.
+
+    >>> import numpy as np
+    >>> from spectral_igl import viz
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(1)
+    >>> mesh, _ = viz.to_pyvista((np.vstack([V, V + 3]), np.vstack([F, F + len(V)])))
+    >>> r = viz.reached_vertices(mesh, [0])
+    >>> int(r.sum()), bool(r[:42].all()), bool(r[42:].any())
+    (42, True, False)
     """
     label = component_labels(mesh)
     src = np.atleast_1d(np.asarray(sources if sources is not None else [], dtype=np.int64))
