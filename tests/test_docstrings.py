@@ -8,6 +8,7 @@ import importlib.util
 import inspect
 import pkgutil
 import re
+import warnings
 from pathlib import Path
 
 import pytest
@@ -60,9 +61,9 @@ def _missing_extras(test) -> list[str]:
 
 
 def test_there_are_examples():
-    # the public functions carry runnable examples; a collapse of this count means the
-    # finder (or the docstrings) broke
-    assert sum(len(t.examples) for t in EXAMPLES) >= 70
+    # every public name carries a runnable example (786 statements in 146 docstrings when
+    # this was last raised); a collapse of this count means the finder (or the docstrings) broke
+    assert sum(len(t.examples) for t in EXAMPLES) >= 750
 
 
 @pytest.mark.parametrize("test", EXAMPLES, ids=[t.name for t in EXAMPLES])
@@ -201,12 +202,17 @@ def test_no_docstring_has_control_characters():
 ENTRY_NAME = re.compile(r"^\*{0,2}\w+(, \*{0,2}\w+)*$|^$")
 
 
-@pytest.mark.parametrize("name", sorted(PUBLIC))
-def test_public_docstring_entries_are_names(name):
+def test_docstring_entries_are_names():
     # a paragraph indented as an entry (after a parameter's description, or a note placed in
     # Returns) renders as a bold fake parameter with its markup shown raw
     docscrape = pytest.importorskip("numpydoc.docscrape")
-    doc = docscrape.NumpyDocString(inspect.getdoc(PUBLIC[name]) or "")
-    bad = [p.name for section in ("Parameters", "Returns", "Yields", "Attributes", "Other Parameters")
-           for p in doc[section] if not ENTRY_NAME.match(p.name)]
-    assert not bad, f"spectral_igl.{name}: entries that are not names: {bad}"
+    bad = {}
+    for name, obj in DOCUMENTED.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)     # sections numpydoc does not know
+            doc = docscrape.NumpyDocString(inspect.getdoc(obj) or "")
+        entries = [p.name for section in ("Parameters", "Returns", "Yields", "Attributes", "Other Parameters")
+                   for p in doc[section] if not ENTRY_NAME.match(p.name)]
+        if entries:
+            bad[name] = entries
+    assert not bad, f"entries that are not names: {bad}"
