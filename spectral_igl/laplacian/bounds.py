@@ -123,6 +123,12 @@ def lambda_max_kind(lap: Laplacian) -> str:
         linear-FEM mass of a triangle or tet mesh), ``"estimate"`` when its mass ratio is a
         Lanczos estimate (any other non-diagonal B).
 
+    Notes
+    -----
+    :func:`lambda_max` is Gershgorin's bound over the mass ratio,
+    :math:`\lambda_{\max}(B^{-1}L) \le \max_i \big(\sum_j |L_{ij}|\big) / (c\, D_{ii})`; it is a
+    proof exactly when :math:`c` (:func:`mass_ratio`) is.
+
     Examples
     --------
     >>> import numpy as np
