@@ -219,6 +219,13 @@ def test_no_docstring_has_control_characters():
     assert not bad, f"control characters (make these docstrings raw): {bad}"
 
 
+def test_section_headers_follow_a_blank_line():
+    # a header glued to the paragraph above it is read as that paragraph's text
+    header = re.compile(r"[^\n]\n(Parameters|Returns|Yields|Raises|Attributes|Notes|Examples|See Also)\n-{3,}")
+    bad = sorted(name for name, obj in DOCUMENTED.items() if header.search(inspect.getdoc(obj) or ""))
+    assert not bad, f"section headers without a blank line before them: {bad}"
+
+
 #: what numpydoc may take as the name of a parameter, return value or attribute
 ENTRY_NAME = re.compile(r"^\*{0,2}\w+(, \*{0,2}\w+)*$|^$")
 

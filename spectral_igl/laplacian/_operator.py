@@ -280,6 +280,7 @@ def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
     ``L`` is symmetrised and its diagonal reset so that every row sums to exactly 0; ``B``
     must be symmetric up to rounding (:data:`MASS_ASYMMETRY`), and both must be real.
     This is the one place where every constructor's matrices are normalised.
+
     Parameters
     ----------
     L : (n, n) sparse or dense float
