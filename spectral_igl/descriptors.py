@@ -295,6 +295,8 @@ def hks(lap, times=None, method: str = "auto", progress=None, return_info: bool 
     as one time, each time with its own certified bound (``kernel_diagonal`` options other
     than ``tol`` select the one-time-at-a-time path).
 
+    The signature of the survey's §6.2.1; spectrum-free as in §6.4.2.
+
     Examples
     --------
     The signature is the heat kernel's diagonal. On the unit sphere every point sees the
@@ -487,6 +489,10 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
         (n,) for a scalar energy, (n, E) for E energies.
     info : dict
         Only with ``return_info=True``.
+
+    Notes
+    -----
+    The wave kernel signature of the survey's §6.1 and §6.2.1, in Aubry et al.'s band-pass form.
 
     Examples
     --------

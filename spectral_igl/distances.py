@@ -512,6 +512,8 @@ def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute"
     with :math:`B^{-1}e_i` for the delta so that it converges under refinement): the filter
     passed to :func:`spectral_distance` is ``heat(t / 2)``.
 
+    The survey's §6.2.1 (diffusion distances) and §6.3 (their discretization).
+
     Examples
     --------
     Against the dense eigendecomposition of a small sphere:
@@ -551,6 +553,8 @@ def commute_time_distance(lap, source, targets=None, **kwargs):
     On surfaces it diverges logarithmically under refinement (the Green's function is
     singular at the diagonal); it is scale invariant in 2-D.
 
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
+
     Examples
     --------
     >>> import numpy as np
@@ -586,6 +590,8 @@ def biharmonic_distance(lap, source, targets=None, **kwargs):
 
     Lipman et al.'s definition (the survey's biharmonic distance): smooth, and convergent
     under refinement on surfaces.
+
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
 
     Examples
     --------
@@ -625,6 +631,8 @@ def polyharmonic_distance(lap, k, source, targets=None, **kwargs):
     .. math:: d^2(i, j) = \sum_{\lambda_l > 0} \lambda_l^{-k} |x_l(i) - x_l(j)|^2
 
     ``k = 1`` is the commute-time distance, ``k = 2`` the biharmonic one.
+
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
 
     Examples
     --------
@@ -671,6 +679,8 @@ def wave_distance(lap, t, source, targets=None, time_unit: str = "absolute", **k
     depend on ``t``: it is the B-norm of the difference of the two discrete deltas
     (and grows under refinement). Provided for completeness of the survey's family.
 
+    The survey's §6.1 (the filter's choice, Fig. 10) and §6.3.
+
     Examples
     --------
     With a lumped mass matrix the distance between two vertices is
@@ -710,6 +720,8 @@ def mexican_hat_distance(lap, t, source, targets=None, time_unit: str = "absolut
     Notes
     -----
     .. math:: d^2(i, j) = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(i) - x_l(j)|^2
+
+    The survey's §6.1 (the filter's choice, Fig. 10) and §6.3.
 
     Examples
     --------
@@ -819,6 +831,8 @@ def pairwise_diffusion_distance(lap, t, seeds, time_unit: str = "absolute", **kw
 
     (the filter passed to :func:`pairwise_spectral_distance` is ``heat(t / 2)``).
 
+    The survey's §6.2.1 (diffusion distances) and §6.3 (their discretization).
+
     Examples
     --------
     >>> import numpy as np
@@ -853,6 +867,8 @@ def pairwise_commute_time_distance(lap, seeds, **kwargs):
     -----
     .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-1}|x_l(s_a)-x_l(s_b)|^2
 
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
+
     Examples
     --------
     >>> import numpy as np
@@ -884,6 +900,8 @@ def pairwise_biharmonic_distance(lap, seeds, **kwargs):
     Notes
     -----
     .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-2}|x_l(s_a)-x_l(s_b)|^2
+
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
 
     Examples
     --------
@@ -921,6 +939,8 @@ def pairwise_polyharmonic_distance(lap, k, seeds, **kwargs):
     Notes
     -----
     .. math:: D_{ab}^2 = \sum_{\lambda_l>0}\lambda_l^{-k}|x_l(s_a)-x_l(s_b)|^2
+
+    The survey's §6.2.2 (commute-time and biharmonic distances) and §6.3.
 
     Examples
     --------
@@ -961,6 +981,8 @@ def pairwise_wave_distance(lap, t, seeds, time_unit: str = "absolute", **kwargs)
     -----
     .. math:: D_{ab}^2 = \sum_l |x_l(s_a) - x_l(s_b)|^2 = \|B^{-1}(e_{s_a} - e_{s_b})\|_B^2
 
+    The survey's §6.1 (the filter's choice, Fig. 10) and §6.3.
+
     Examples
     --------
     >>> import numpy as np
@@ -998,6 +1020,8 @@ def pairwise_mexican_hat_distance(lap, t, seeds, time_unit: str = "absolute", **
     Notes
     -----
     .. math:: D_{ab}^2 = \sum_l t^2\lambda_l^2 e^{-2t\lambda_l} |x_l(s_a) - x_l(s_b)|^2
+
+    The survey's §6.1 (the filter's choice, Fig. 10) and §6.3.
 
     Examples
     --------

@@ -326,6 +326,8 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     non-negative weights: :attr:`Laplacian.is_metzler`) the exact kernel is non-negative and
     so is the returned one.
 
+    The discrete heat kernel of the survey's §5.3, computed as in §5.5.
+
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig

@@ -37,6 +37,10 @@ def diffusion_basis(lap, t, centers, method: str = "auto", tol: float = 1e-8):
         partition of unity weighted by the areas: :math:`\sum_i m_i \psi_i = \mathbf 1`
         with :math:`m = B\mathbf 1` (on each connected component).
 
+    Notes
+    -----
+    The diffusion basis of the survey's §7.2.
+
     Examples
     --------
     Each column integrates to 1, and all n of them weighted by the masses sum to 1:
@@ -214,6 +218,10 @@ def feature_points(lap, n_eigenfunctions: int = 6, t: float = 0.1, source: str =
         Sorted, distinct vertex indices: the minima and maxima (over the neighbourhoods
         of :func:`graph_extrema`) of each eigenfunction (``"eigenfunctions"``) or the
         maxima of the auto-diffusion function (``"adf"``, tips of protrusions).
+
+    Notes
+    -----
+    The feature points of the survey's §7.2 (Ruggeri et al. 2010; Gebal et al. 2009).
 
     Examples
     --------

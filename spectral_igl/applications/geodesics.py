@@ -386,6 +386,10 @@ def geodesic_distance(lap_or_mesh, source, method: str = "heat", t: float | None
         ``inf`` exactly on the vertices of connected components that hold no source (e.g.
         vertices no face references): no path reaches them.
 
+    Notes
+    -----
+    The survey's §6.2.3 (geodesics from the heat kernel).
+
     Examples
     --------
     Against great-circle distances on the unit sphere (642 vertices):
@@ -481,6 +485,8 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     (no time resolves the first rings: there :math:`d^2/4t < 1/4` already at
     :math:`t = 4h^2`), :math:`[2h, 5h)` 3% to 44%, :math:`[5h, 10h)` 2% to 9%, beyond
     :math:`10h` 1% to 8%.
+
+    The survey's §6.2.3 (geodesics from the heat kernel).
 
     Examples
     --------

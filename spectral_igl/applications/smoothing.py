@@ -46,6 +46,8 @@ def smooth(lap, f, eps):
     :math:`\tilde f = \sum_i \varepsilon (\lambda_i^2 + \varepsilon)^{-1}
     \langle f, x_i\rangle_B\, x_i`.
 
+    The survey's §7.1 (smoothing).
+
     Examples
     --------
     Height on a sphere plus white noise of 0.3:
@@ -92,6 +94,10 @@ def smooth_constrained(lap, f, fixed, eps: float = 0.0):
     Returns
     -------
     (n,) or (n, k) float
+
+    Notes
+    -----
+    The survey's §7.1 (smoothing).
 
     Examples
     --------
@@ -151,6 +157,10 @@ def diffusion_smooth(lap, f, t, method: str = "auto", tol: float = 1e-8, return_
     -------
     (n,) or (n, k) float
     info : dict, only with ``return_info``
+
+    Notes
+    -----
+    The survey's §7.1 (smoothing).
 
     Examples
     --------

@@ -32,6 +32,10 @@ def schrodinger(lap, h, t, method: str = "auto", tol: float = 1e-8):
         The propagator is unitary in the B-inner product:
         :math:`\|H(t)\|_B = \|h\|_B` for every ``t``.
 
+    Notes
+    -----
+    The survey's §5.2 (wave equation).
+
     Examples
     --------
     The propagator keeps the B-norm:
