@@ -60,10 +60,25 @@ def test_sphinx_build_without_warnings(tmp_path):
     # MathJax is served with the pages (they read offline), not loaded from a CDN
     assert '_static/mathjax/tex-chtml-full.js' in page and "cdn." not in page, page[:3000]
     assert (out / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").is_dir()
-    # the gallery shows every picture, the tables page the README's measured tables
-    gallery = (out / "gallery.html").read_text(encoding="utf-8")
-    for png in sorted((DOCS / "gallery").glob("*.png")):
-        assert png.name in gallery, png.name
+    # the gallery: a page per public example script with its code and its stored pictures,
+    # and every stored picture on some page
+    from example_gallery import pictures, public_scripts
+
+    index = (out / "examples" / "index.html").read_text(encoding="utf-8")
+    shown = set()
+    for script in public_scripts():
+        html = (out / "examples" / f"{script.stem}.html").read_text(encoding="utf-8")
+        assert f"{script.stem}.html" in index and "main" in html and "highlight" in html, script.name
+        assert f"examples/{script.name}" in html, script.name
+        for png in pictures(script):
+            assert png.name in html, (script.name, png.name)
+            shown.add(png.name)
+    assert shown == {p.name for p in (DOCS / "gallery").glob("*.png")}
+    # the task pages and the notebook, with its stored pictures
+    for page in ("heat_kernels", "descriptors", "bounds"):
+        assert 'class="highlight-python' in (out / f"{page}.html").read_text(encoding="utf-8"), page
+    notebook = (out / "notebooks" / "first_steps.html").read_text(encoding="utf-8")
+    assert notebook.count("<img") >= 2 and "heat_kernel" in notebook
     results = (out / "results.html").read_text(encoding="utf-8")
     assert results.count("<table") >= 5 and "One-to-all distances" in results
     assert "write_mesh" in (out / "getting_started.html").read_text(encoding="utf-8")
