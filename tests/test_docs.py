@@ -82,3 +82,30 @@ def test_sphinx_build_without_warnings(tmp_path):
     results = (out / "results.html").read_text(encoding="utf-8")
     assert results.count("<table") >= 5 and "One-to-all distances" in results
     assert "write_mesh" in (out / "getting_started.html").read_text(encoding="utf-8")
+
+
+def test_a_new_example_script_enters_the_gallery_as_clean_restructuredtext(tmp_path):
+    """Any public examples/*.py is picked up; its plain-text docstring becomes warning-free rst."""
+    import io
+
+    import docutils.core
+
+    from example_gallery import gallery_source, public_scripts
+
+    script = tmp_path / "matching.py"
+    script.write_text('"""Point matching: phi^2 = s^-2 *and* `x`, a_b_ and |x|.\n\n'
+                      "Descriptors on both shapes, then nearest neighbours\nin descriptor space.\n\n"
+                      "    python examples/matching.py --quick\n\n- a list?\n"
+                      '"""\nimport numpy as np\n\n\ndef main(argv=None):\n    return {}\n', encoding="utf-8")
+    (tmp_path / "_private.py").write_text('"""Not an example."""\n', encoding="utf-8")
+    assert [p.name for p in public_scripts(tmp_path)] == ["matching.py"]
+    source = gallery_source(script)
+    code = compile(source, "matching.py", "exec")                   # still the same program
+    doc = source.split('"""')[1]
+    title = doc.strip().splitlines()[0]
+    assert title.startswith("Point matching") and doc.strip().splitlines()[1] == "=" * len(title)
+    assert "import numpy as np" in source and code.co_filename == "matching.py"
+    stream = io.StringIO()
+    docutils.core.publish_doctree(doc, settings_overrides={"report_level": 2, "halt_level": 5,
+                                                           "warning_stream": stream})
+    assert not stream.getvalue(), stream.getvalue()             # no warning, no error

@@ -59,11 +59,17 @@ def rst_paragraphs(body: str) -> list[str]:
     return out
 
 
+def png_patterns(code: str) -> list[re.Pattern]:
+    """The PNG names a script's code writes, as patterns: ``f"fig03_{k:02d}.png"`` -> ``fig03_.+\\.png``."""
+    names = re.findall(r"""["']((?:[^"'\s{]|\{[^}]*\})+\.png)["']""", code)
+    return [re.compile(".+".join(map(re.escape, re.split(r"\{[^}]*\}", name))) + "$") for name in names]
+
+
 def pictures(script: Path, folder: Path = PICTURES) -> list[Path]:
-    """The stored pictures of ``script``: named in its code, or named after it."""
-    code = script.read_text(encoding="utf-8")
+    """The stored pictures of ``script``: those its code writes, or named after it."""
+    patterns = png_patterns(script.read_text(encoding="utf-8"))
     return [png for png in sorted(folder.glob("*.png"))
-            if png.name in code or png.stem.startswith(script.stem)]
+            if png.stem.startswith(script.stem) or any(p.match(png.name) for p in patterns)]
 
 
 def captions(folder: Path = PICTURES) -> dict[str, str]:
@@ -93,7 +99,7 @@ def gallery_source(script: Path, caption: dict[str, str] | None = None) -> str:
     end = tree.body[0].end_lineno                      # the docstring's last line
     code = "\n".join(text.splitlines()[end:]).lstrip("\n")
     thumb = f'# sphinx_gallery_thumbnail_path = "gallery/{pngs[0].name}"\n' if pngs else ""
-    return '"""\n' + "\n".join(lines).rstrip() + '\n"""\n' + thumb + code + ("\n" if not code.endswith("\n") else "")
+    return 'r"""\n' + "\n".join(lines).rstrip() + '\n"""\n' + thumb + code + ("\n" if not code.endswith("\n") else "")
 
 
 def write_sources(source: Path = SOURCE) -> list[Path]:
