@@ -75,6 +75,9 @@ sphinx_gallery_conf = {
     "line_numbers": False,
     "backreferences_dir": None,
     "doc_module": (),
+    # a downloaded notebook runs its example in quick mode (from examples/, beside _common.py)
+    "first_notebook_cell": ("# Run from the repository's examples/ folder (the scripts share _common.py).\n"
+                            "import sys\n\nsys.argv = [\"example\", \"--quick\"]"),
 }
 
 # --- notebooks: rendered with their stored outputs, never executed by the build ----------
