@@ -8,10 +8,11 @@ robust_laplacian, in the same run); the Neumann rectangle [0, 2] x [0, 1],
 
 Usage::
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/domains.py
+    OPENBLAS_NUM_THREADS=1 python benchmarks/domains.py [--json-dir docs/results]
 """
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -23,6 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import spectral_igl as sig  # noqa: E402
 from data_generators import icosphere, quad_sphere, sphere_eigenvalues  # noqa: E402
+from _results import Table  # noqa: E402
 from point_clouds import SAMPLINGS  # noqa: E402
 
 EX16 = sphere_eigenvalues(17)[1:]
@@ -49,8 +51,12 @@ def rect_points(n, seed=5):
     return np.c_[rng.random((n, 2)) * [2.0, 1.0], np.zeros(n)]
 
 
-def main():
+def main(argv=None):
     import robust_laplacian
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
+    args = ap.parse_args(argv)
 
     rows = []
     for lev in (3, 4):
@@ -76,10 +82,10 @@ def main():
         lap = sig.point_cloud_laplacian(P, boundary=True)
         L, M = robust_laplacian.point_cloud_laplacian(P)
         rows.append(("Neumann rectangle, random points (`boundary=True`)", n, err(lap.L, lap.B, RECT), err(L, M, RECT)))
-    print("| domain | n | spectral_igl | robust_laplacian |")
-    print("|---|---|---|---|")
+    table = Table("domains", ["domain", "n", "spectral_igl", "robust_laplacian"], args.json_dir)
     for name, n, e, r in rows:
-        print(f"| {name} | {n:,} | {100 * e:.2f}% | {'' if r is None else f'{100 * r:.2f}%'} |", flush=True)
+        table.add(name, f"{n:,}", f"{100 * e:.2f}%", "" if r is None else f"{100 * r:.2f}%")
+    table.close()
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Heat-geodesic precompute and per-source solve time against libigl and potpourri3d, and one
 Cholesky of B + tL.
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/geodesic_precompute.py [--meshes DIR] [--repeat 5]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/geodesic_precompute.py [--meshes DIR] [--repeat 5] [--json-dir DIR]
 
 Each mesh is scaled to unit area. Each time is the median of ``--repeat`` runs in this
 process, the contenders taking turns within each repetition (the machine's load drifts; a
@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import Table  # beside this script
 
 import spectral_igl as sig
 from spectral_igl.applications.geodesics import HeatGeodesics
@@ -37,6 +38,7 @@ def main():
     ap.add_argument("--names", default="cow.obj,spot.obj,homer.obj,fandisk.obj,rocker-arm.obj,armadillo.obj")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--sources", type=int, default=40)
+    ap.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
     args = ap.parse_args()
     import igl
 
@@ -44,9 +46,9 @@ def main():
         import potpourri3d as pp3d
     except ImportError:
         pp3d = None
-    print("| mesh | n | spectral_igl (s) | libigl (s) | potpourri3d (s) | ours ÷ libigl | ours ÷ Cholesky "
-          "| solve: ours (ms) | solve: libigl (ms) | solve ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    table = Table("geodesic_precompute",
+                  ["mesh", "n", "spectral_igl (s)", "libigl (s)", "potpourri3d (s)", "ours ÷ libigl",
+                   "ours ÷ Cholesky", "solve: ours (ms)", "solve: libigl (ms)", "solve ratio"], args.json_dir)
     for name in args.names.split(","):
         V, F = read_mesh(args.meshes / name)
         lap0 = sig.laplacian(V, F, mass="lumped")
@@ -73,9 +75,10 @@ def main():
             T["s_libigl"].append(timed(lambda: [igl.heat_geodesics_solve(data, np.array([s]))
                                                 for s in sources])[0] / len(sources))
         m = {k: float(np.median(v)) if v else float("nan") for k, v in T.items()}
-        print(f"| {name} | {lap.n:,} | {m['ours']:.3f} | {m['libigl']:.3f} | {m['pp3d']:.3f} | "
-              f"{m['ours'] / m['libigl']:.2f} | {m['ours'] / m['chol']:.2f} | {1e3 * m['s_ours']:.2f} | "
-              f"{1e3 * m['s_libigl']:.2f} | {m['s_ours'] / m['s_libigl']:.2f} |", flush=True)
+        table.add(name, f"{lap.n:,}", f"{m['ours']:.3f}", f"{m['libigl']:.3f}", f"{m['pp3d']:.3f}",
+                  f"{m['ours'] / m['libigl']:.2f}", f"{m['ours'] / m['chol']:.2f}", f"{1e3 * m['s_ours']:.2f}",
+                  f"{1e3 * m['s_libigl']:.2f}", f"{m['s_ours'] / m['s_libigl']:.2f}")
+    table.close()
 
 
 if __name__ == "__main__":

@@ -2,14 +2,16 @@
 
 Usage::
 
-    python benchmarks/geodesics.py [--meshes DIR] [--sources 5] [--quick]
+    python benchmarks/geodesics.py [--meshes DIR] [--sources 5] [--quick] [--json-dir docs/results]
 
 For each mesh (scaled to unit area): mean relative error |d - d*| / d* over all vertices
 (sources excluded) against ``igl.exact_geodesic`` (great-circle distance on the
 icosphere), averaged over random sources, at the default t (m = 1, t = m h^2) and at the
 best m of a grid (tuned t); and the precompute time of each solver. Then Varadhan's
 formula at several t, and the heat method on a tetrahedral ball against straight-line
-distance.
+distance. With ``--json-dir`` the heat-method table (``geodesics.json``: mean error at the
+default t / at the tuned t, per mesh and solver) and Varadhan's (``varadhan.json``) are written
+for docs/results.md.
 """
 from __future__ import annotations
 
@@ -22,14 +24,20 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import igl  # noqa: E402
 
 import spectral_igl as sig  # noqa: E402
+from _results import Table  # noqa: E402
 from data_generators import icosphere  # noqa: E402
 from spectral_igl.applications.geodesics import HeatGeodesics, mean_edge_length  # noqa: E402
 
 M_GRID = (0.25, 0.5, 1.0, 2.0, 4.0)
+#: the solvers of the heat-method table, in its column order, and their column titles
+COLUMNS = {"spectral_igl intrinsic_delaunay": "intrinsic Delaunay step (default)",
+           "spectral_igl euler": "backward Euler", "spectral_igl engine": 'exact heat (`step="engine"`)',
+           "libigl heat_geodesics": "libigl heat", "potpourri3d": "potpourri3d"}
 
 
 def rel_error(d, exact):
@@ -109,7 +117,18 @@ def heat_table(names, mesh_dir, n_sources, grid):
     return rows
 
 
-def varadhan_table(n_sources=3):
+def write_heat_table(rows, json_dir):
+    """The heat-method rows as one table: mesh (n), then "default / tuned" error per solver."""
+    table = Table("geodesics", ["mesh (n)"] + list(COLUMNS.values()), json_dir)
+    cells = {}
+    for name, n, key, default, tuned, _, _ in rows:
+        cells.setdefault((name, n), {})[key] = f"{100 * default:.2f} / {100 * tuned:.2f}%"
+    for (name, n), by_key in cells.items():
+        table.add(f"{name.rsplit('.', 1)[0]} ({n:,})", *(by_key.get(k, "") for k in COLUMNS))
+    table.close()
+
+
+def varadhan_table(n_sources=3, json_dir=None):
     """Varadhan's formula on the unit sphere against great-circle distance."""
     from spectral_igl.applications.geodesics import varadhan_distance
 
@@ -120,9 +139,10 @@ def varadhan_table(n_sources=3):
     sources = rng.choice(len(V), n_sources, replace=False)
     print("\nVaradhan on the unit icosphere(4), n=%d, h=%.4f: mean relative error by distance band" % (len(V), h))
     bands = [(0.0, 0.25), (0.25, 0.5), (0.5, 1.0), (1.0, 2.0), (2.0, np.pi + 0.1)]
-    print("   t/h^2 " + "".join(f"  d in [{a:.2f},{b:.2f})" for a, b in bands) + "   unusable (inf)")
-    for m in (0.5, 1.0, 4.0, 16.0, 64.0):
-        t = m * h * h
+    table = Table("varadhan", ["t / h²"] + [f"d in [{a:.2f}, {b:.2f})" for a, b in bands]
+                  + ["vertices infinite"], json_dir)
+    for m in (0.5, 1.0, 4.0, 16.0, 64.0, None):        # None: the default ladder of times
+        t = None if m is None else m * h * h
         acc = np.zeros(len(bands))
         bad = 0
         for s in sources:
@@ -132,7 +152,9 @@ def varadhan_table(n_sources=3):
             for k, (a, b) in enumerate(bands):
                 sel = (exact >= max(a, 1e-9)) & (exact < b) & np.isfinite(d)
                 acc[k] += np.mean(np.abs(d[sel] - exact[sel]) / exact[sel]) if sel.any() else np.nan
-        print(f"  {m:6g} " + "".join(f"  {100 * a / n_sources:17.2f}%" for a in acc) + f"   {bad // n_sources:8d}")
+        table.add("ladder (`t=None`, the default)" if m is None else f"{m:g}",
+                  *(f"{100 * a / n_sources:.2f}%" for a in acc), bad // n_sources)
+    table.close()
 
 
 def tet_table():
@@ -175,15 +197,18 @@ def main(argv=None):
     ap.add_argument("--meshes", type=Path, default=ROOT.parent / "shared" / "data" / "meshes")
     ap.add_argument("--sources", type=int, default=5)
     ap.add_argument("--quick", action="store_true", help="fewer meshes and t values")
+    ap.add_argument("--json-dir", help="also write the two tables as JSON in this folder (docs/results)")
     args = ap.parse_args(argv)
     names = ["icosphere5", "spot.obj", "cow.obj", "homer.obj", "fertility.off", "cheburashka.obj",
              "rocker-arm.obj", "fandisk.obj"]
     grid = M_GRID
     if args.quick:
         names, grid = names[:3], (0.5, 1.0, 2.0)
-    heat_table(names, args.meshes, args.sources, grid)
+    rows = heat_table(names, args.meshes, args.sources, grid)
+    print()
+    write_heat_table(rows, args.json_dir)
     try:
-        varadhan_table()
+        varadhan_table(json_dir=args.json_dir)
     except ImportError as err:
         print(f"\nVaradhan skipped: {err}")
     tet_table()

@@ -12,7 +12,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from _timing import median_time  # beside this script
+from _results import Table  # beside this script
+from _timing import median_time
 
 import spectral_igl as sig
 from spectral_igl.io import read_mesh
@@ -26,10 +27,11 @@ def main():
     ap.add_argument("--meshes", type=Path, default=ROOT.parent / "shared" / "data" / "meshes")
     ap.add_argument("--names", default="cow.obj,spot.obj,homer.obj,fandisk.obj,rocker-arm.obj,armadillo.obj")
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
     args = ap.parse_args()
-    print("| mesh | n | minimum degree (ms) | METIS (ms) | nnz L: min. degree | nnz L: METIS | ratio "
-          "| factor: min. degree (ms) | factor: METIS (ms) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    table = Table("ordering", ["mesh", "n", "minimum degree (ms)", "METIS (ms)", "nnz L: min. degree",
+                               "nnz L: METIS", "ratio", "factor: min. degree (ms)", "factor: METIS (ms)"],
+                  args.json_dir)
     for name in args.names.split(","):
         V, F = read_mesh(args.meshes / name)
         lap = sig.laplacian(V, F, mass="lumped")
@@ -41,8 +43,9 @@ def main():
         nd = ldlt.Pattern(A, ordering="nested_dissection")
         f_md, _ = median_time(lambda: ldlt.LDLT(A, md), args.repeat)
         f_nd, _ = median_time(lambda: ldlt.LDLT(A, nd), args.repeat)
-        print(f"| {name} | {lap.n:,} | {1e3 * t_md:.1f} | {1e3 * t_nd:.1f} | {md.nnz_L:,} | {nd.nnz_L:,} | "
-              f"{md.nnz_L / nd.nnz_L:.2f} | {1e3 * f_md:.1f} | {1e3 * f_nd:.1f} |", flush=True)
+        table.add(name, f"{lap.n:,}", f"{1e3 * t_md:.1f}", f"{1e3 * t_nd:.1f}", f"{md.nnz_L:,}",
+                  f"{nd.nnz_L:,}", f"{md.nnz_L / nd.nnz_L:.2f}", f"{1e3 * f_md:.1f}", f"{1e3 * f_nd:.1f}")
+    table.close()
 
 
 if __name__ == "__main__":

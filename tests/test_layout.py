@@ -46,6 +46,7 @@ LAZY_EXTRAS = {
     "meshio": "only formats libigl does not read",
     "distributed": "only a collection run on a cluster", "zarr": "only a collection's store",
     "tqdm": "only a requested progress bar",
+    "IPython": "only a plot displayed by IPython (a notebook), which is running",
     "cholespy": "a factorization back end chosen at run time",
     "pymetis": "a fill-reducing ordering chosen at run time",
     "igl": "keeps `import spectral_igl` quick; the functions that assemble need it",

@@ -1,7 +1,7 @@
 """Sphinx helpers of the spectral_igl documentation.
 
-``.. gallery::`` shows every ``docs/gallery/*.png`` as a figure, captioned with the text the
-table of ``docs/gallery/captions.md`` gives it (the file name when the table does not mention it).
+:func:`readme_captions` reads the captions of the stored gallery pictures from the table of
+``docs/gallery/captions.md`` (the gallery itself: ``example_gallery.py``).
 Short Python references in docstrings (``:func:`graph_extrema```) are resolved to the one
 documented object of that name; see :func:`resolve_short_names`.
 """
@@ -9,13 +9,6 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-
-from docutils import nodes
-from docutils.statemachine import StringList
-from sphinx.util.docutils import SphinxDirective
-
-ROOT = Path(__file__).resolve().parents[2]
-GALLERY = ROOT / "docs" / "gallery"
 
 
 def readme_captions(readme: Path) -> dict[str, str]:
@@ -27,31 +20,6 @@ def readme_captions(readme: Path) -> dict[str, str]:
     for m in re.finditer(r"!\[[^\]]*\]\(docs/gallery/([^)]+\.png)\)\s*([^|\n]*)", text):
         out[m.group(1)] = m.group(2).strip()
     return out
-
-
-class Gallery(SphinxDirective):
-    """Every PNG of ``docs/gallery`` with its caption, in file-name order."""
-
-    has_content = False
-
-    def run(self):
-        pngs = sorted(GALLERY.glob("*.png"))
-        if not pngs:
-            return [nodes.paragraph(text="No pictures in docs/gallery yet: run "
-                                         "python examples/make_gallery.py.")]
-        captions = readme_captions(GALLERY / "captions.md")
-        here = Path(self.env.doc2path(self.env.docname)).parent
-        lines = []
-        for png in pngs:
-            rel = Path(png).relative_to(here) if png.is_relative_to(here) else png
-            caption = captions.get(png.name) or png.stem.replace("_", " ")
-            lines += [f".. figure:: {rel.as_posix()}", "   :width: 100%",
-                      f"   :alt: {caption}", "", f"   {caption} (``{png.name}``)", ""]
-        container = nodes.container()
-        self.state.nested_parse(StringList(lines, source="gallery"), self.content_offset, container)
-        return container.children
-
-
 
 
 # ---- cross-references ----------------------------------------------------------------------
@@ -120,6 +88,5 @@ def resolve_short_names(app, env, node, contnode):
 
 
 def setup(app):
-    app.add_directive("gallery", Gallery)
     app.connect("missing-reference", resolve_short_names)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -300,3 +300,45 @@ def save_png(image, path, max_colors: int | None = None, optimize: bool = False)
         img = img.convert("RGB").quantize(colors=max_colors, method=Image.Quantize.MEDIANCUT)
     img.save(str(path), optimize=bool(optimize))
     return path
+
+
+def notebook_picture(plotter, image=None):
+    """Make ``plotter`` show as a picture when it ends a notebook cell, and return it.
+
+    IPython shows an object through its ``_ipython_display_``. A plotter still open is shown
+    by ``plotter.show()``, through pyvista's Jupyter backend (``pyvista.set_jupyter_backend``:
+    ``"static"`` a PNG, ``"trame"`` or ``"html"`` an interactive view; ``"static"`` when none
+    is set). A plotter already closed (a picture written with ``filename=``) shows ``image``,
+    the picture it rendered, which becomes its ``last_image`` (pyvista's ``_repr_png_``).
+    Nothing else about the plotter changes: scripts use it as before.
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter
+        The plotter to return.
+    image : (h, w, 3) uint8 array, optional
+        The picture a closed plotter rendered.
+
+    Returns
+    -------
+    pyvista.Plotter
+        ``plotter``.
+    """
+    if image is not None:
+        plotter.last_image = np.asarray(image)
+
+    def _ipython_display_():
+        if plotter.render_window is not None:          # open: pyvista's notebook backend
+            backend = plotter.theme.jupyter_backend or "static"
+            plotter.show(jupyter_backend=backend)
+            return
+        from IPython.display import Image, display     # closed: the picture it rendered
+
+        png = plotter._repr_png_()
+        if png is not None:
+            display(Image(data=png, format="png"))
+        else:
+            display({"text/plain": repr(plotter)}, raw=True)
+
+    plotter._ipython_display_ = _ipython_display_
+    return plotter

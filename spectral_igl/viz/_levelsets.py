@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._backend import (CRITICAL_COLORS, KINDS, NEUTRAL_COLOR, color_kind, colormap, headless, pyvista,
-                       save_png, to_pyvista)
+from ._backend import (CRITICAL_COLORS, KINDS, NEUTRAL_COLOR, color_kind, colormap, headless,
+                       notebook_picture, pyvista, save_png, to_pyvista)
 from ._camera import fit_view, parse_view, place_camera, view_sees
 from ._scale import SCALES, apply_ticks, use_log_scale
 
@@ -500,11 +500,12 @@ def plot_levelsets(shape, f, *, kind="auto", cmap=None, n_levels=12, clim=None, 
             add_source_marker(plotter, P[src], source_color)
 
     _set_attribute(pv, plotter, "spectral_igl_views", views)
+    image = None
     if filename is not None:
         image = plotter.screenshot(return_img=True)
         plotter.close()
         save_png(image, filename)
-    return plotter
+    return notebook_picture(plotter, image)
 
 
 def _grey_notes(comp, src, f, ok, log):
