@@ -12,6 +12,7 @@ lifted on leaving them, so the caller's own BLAS work keeps the caller's setting
 from __future__ import annotations
 
 import functools
+import threading
 from contextlib import contextmanager
 
 from threadpoolctl import ThreadpoolController
@@ -23,15 +24,17 @@ __all__ = ["MAX_BLAS_THREADS", "blas_threads", "serial_blas"]
 MAX_BLAS_THREADS = 1
 
 _controller = []
+_state = threading.local()      # depth of nested sections in this thread
 
 
-def _get_controller():
-    """A threadpoolctl controller of the BLAS libraries loaded (built once), or None."""
+def _blas_libraries():
+    """threadpoolctl's controllers of the BLAS libraries loaded (found once), possibly empty."""
     if not _controller:
         try:
-            _controller.append(ThreadpoolController())
+            libs = [lib for lib in ThreadpoolController().lib_controllers if lib.user_api == "blas"]
         except Exception:          # pragma: no cover - unable to inspect the loaded libraries
-            _controller.append(None)
+            libs = []
+        _controller.append(libs)
     return _controller[0]
 
 
@@ -39,6 +42,10 @@ def _get_controller():
 def blas_threads(limit: int | None = None):
     """Context in which the BLAS uses at most ``limit`` threads (default
     :data:`MAX_BLAS_THREADS`; ``None`` there: no change).
+
+    Cheap enough to wrap every solve: a nested section changes nothing, and an outer one only
+    reads each library's thread count (a few microseconds) and sets those above the limit,
+    restoring them on leaving.
 
     Examples
     --------
@@ -50,12 +57,24 @@ def blas_threads(limit: int | None = None):
     [1.0, 1.0, 1.0]
     """
     limit = MAX_BLAS_THREADS if limit is None else limit
-    ctl = _get_controller() if limit is not None else None
-    if ctl is None:
+    depth = getattr(_state, "depth", 0)
+    if limit is None or depth:
         yield
         return
-    with ctl.limit(limits=int(limit), user_api="blas"):
+    limit = int(limit)
+    changed = []
+    for lib in _blas_libraries():
+        old = lib.num_threads
+        if old > limit:
+            lib.set_num_threads(limit)
+            changed.append((lib, old))
+    _state.depth = 1
+    try:
         yield
+    finally:
+        _state.depth = 0
+        for lib, old in changed:
+            lib.set_num_threads(old)
 
 
 def serial_blas(fn):
