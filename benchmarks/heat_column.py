@@ -24,7 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import spectral_igl as sig  # noqa: E402
-from spectral_igl import filters, solvers  # noqa: E402
+from spectral_igl import filters, linalg as solvers  # noqa: E402
 from spectral_igl.linalg import factorize  # noqa: E402
 
 SPHERE_LEVEL = {"10k": 5, "40k": 6, "160k": 7, "650k": 8}

@@ -29,7 +29,7 @@ CASES = 2000 if LONG else 300
 MAX_SOLVES = 10 ** 6 if LONG else 4000
 
 METHODS = ("auto", "dense", "euler", "taylor1", "power", "krylov", "shift_invert", "taylor",
-           "chebyshev", "rational", "contour")
+           "chebyshev", "rational", "contour", "gauss_legendre")
 FILTERS = ("heat", "diffusion", "wave", "mexican_hat", "mexican_hat_survey", "multiscale",
            "commute_time", "biharmonic", "polyharmonic3", "polyharmonic4", "user")
 TOLS = (1e-4, 1e-6, 1e-8, 1e-10)

@@ -46,6 +46,9 @@ Methods
                   approximation (Carathéodory--Fejér) for heat, exact pseudo-solves for
                   :math:`s^{-k/2}`, an AAA fit otherwise.
 ``"contour"``     Talbot quadrature of the Cauchy integral (heat only).
+``"gauss_legendre"``  the survey's Algorithm 2, case II: Gauss--Legendre quadrature of the
+                  Cauchy integral on an ellipse around the spectrum, any analytic filter
+                  (``nodes`` complex solves).
 ``"auto"``        the cheapest of the above meeting ``tol`` (see :func:`choose_method`).
 """
 from __future__ import annotations

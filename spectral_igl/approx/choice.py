@@ -10,7 +10,7 @@ from .._validate import as_int, as_positive
 from ..filters import Filter
 from ..laplacian import Laplacian, lambda_max
 from ..linalg import lambda_min_positive
-from .contour import ContourPlan
+from .contour import ContourPlan, GaussLegendrePlan
 from .krylov import KrylovPlan, ShiftInvertPlan
 from .polynomial import ChebyshevPlan, EulerPlan, PowerPlan, Taylor1Plan, TaylorPlan
 from .rational import RationalPlan, certifiable
@@ -34,6 +34,7 @@ PLANS = {
     "chebyshev": ChebyshevPlan,
     "rational": RationalPlan,
     "contour": ContourPlan,
+    "gauss_legendre": GaussLegendrePlan,
 }
 #: The engine's method names, read by every entry point, the command line and the viewer.
 METHODS = ("auto",) + tuple(PLANS)
@@ -120,7 +121,7 @@ OPTIONS = {
     "max_degree": (("taylor", "chebyshev"), (1, 1000000)),
     "squarings": (("power",), (0, 60)),
     "max_solves": (("power",), (1, 10000000)),
-    "nodes": (("contour",), (1, 4096)),
+    "nodes": (("contour", "gauss_legendre"), (1, 4096)),
     "shift": (("shift_invert",), None),
 }
 

@@ -54,7 +54,7 @@ class SpectralOperator(spla.LinearOperator):
         Sparse direct solver for real shifted matrices (complex ones use SuperLU).
     **options
         Method settings: ``k`` (eigen), ``steps`` (euler, krylov, shift_invert), ``degree``
-        (taylor, chebyshev, rational, power), ``squarings`` (power), ``nodes`` (contour),
+        (taylor, chebyshev, rational, power), ``squarings`` (power), ``nodes`` (contour, gauss_legendre),
         ``shift`` (shift_invert).
 
     Attributes

@@ -9,7 +9,7 @@ r"""The engine's sparse linear algebra: factorizations, grounded pseudo-solves, 
 - :mod:`.eigen`: generalized eigenpairs (the truncated baseline and the dense ground truth)
   and the smallest positive eigenvalue.
 """
-from .eigen import (cached_eigs, dense_eigs, eigenvalue_bracket, eigs, gap_lower_bound, lambda_min_positive,
+from .eigen import (EIG_METHODS, cached_eigs, dense_eigs, eigenvalue_bracket, eigs, gap_lower_bound, lambda_min_positive,
                     lambda_min_positive_kind, negative_inertia)
 from .factor import BACKENDS, Factor, available_backends, factorize
 from .ldlt import LDLT, Pattern
@@ -28,6 +28,6 @@ from .solves import (
 
 __all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
            "shifted_factor", "mass_solve", "inverse_mass_diagonal", "pseudo_solve", "grounded_vertices", "grounded_factor",
-           "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "dense_eigs",
+           "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "EIG_METHODS", "dense_eigs",
            "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind", "negative_inertia", "eigenvalue_bracket",
            "gap_lower_bound"]

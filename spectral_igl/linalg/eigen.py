@@ -14,11 +14,12 @@ from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, ma
 from ..laplacian.units import dimension
 from ..progress import progress_bar
 from . import ldlt
+from .eigensolvers import coarse_mesh, krylov_schur, prolongation, subspace_refine
 from .factor import check_backend, factorize
 from .solves import ldlt_factor
 from .threads import serial_blas
 
-__all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
+__all__ = ["eigs", "EIG_METHODS", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind",
            "negative_inertia", "eigenvalue_bracket", "gap_lower_bound"]
 
 
@@ -26,16 +27,28 @@ __all__ = ["eigs", "dense_eigs", "cached_eigs", "lambda_min_positive", "lambda_m
 #: B-orthogonal complement of the pairs already found for the ones the count says are missing
 MAX_SEARCHES = 5
 
+#: the inner eigensolvers of :func:`eigs` (each certified the same way)
+EIG_METHODS = ("lanczos", "krylov_schur", "multires")
+
+#: ``method="multires"``: the coarse mesh has about this fraction of the faces (at least
+#: :data:`MULTIRES_MIN_FACES` per wanted pair); below that the direct Lanczos path is taken
+MULTIRES_FRACTION = 0.125
+MULTIRES_MIN_FACES = 12
+
+#: ``method="multires"``: most subspace iterations on the fine mesh after the prolongation
+MULTIRES_ITERATIONS = 30
+
 #: the inertia count is taken only at a shift at least this fraction of ``lambda_max(lap)`` away
 #: from every computed eigenvalue's enclosure (see :func:`eigs`, "Certificate")
 COUNT_MARGIN = 1e-10
 
 
 def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progress=None,
-         return_info: bool = False):
+         return_info: bool = False, method: str = "lanczos"):
     r"""The ``k`` smallest generalized eigenpairs :math:`L x = \lambda B x`, certified.
 
-    Shift-invert Lanczos (ARPACK) in the B-inner product, with ker L deflated exactly:
+    Shift-invert Lanczos (ARPACK; or the Krylov--Schur method, or a prolongation from a
+    coarse mesh, see ``method``) in the B-inner product, with ker L deflated exactly:
     the first ``lap.n_components`` pairs are :math:`\lambda = 0` with the B-normalised
     indicator of each connected component, and Lanczos runs on the B-orthogonal
     complement, so shapes with many components (or isolated vertices) lose no
@@ -98,6 +111,17 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
         :mod:`spectral_igl.progress`; default off).
     return_info : bool
         Also return the certificate.
+    method : {"lanczos", "krylov_schur", "multires"}
+        The first search: ``"lanczos"`` (ARPACK's implicitly restarted Lanczos, default);
+        ``"krylov_schur"`` (thick restart, Stewart 2001, the survey's Table 2:
+        :func:`~spectral_igl.linalg.eigensolvers.krylov_schur`); ``"multires"`` (Vaxman et
+        al. 2010, triangle meshes: the pairs of a mesh decimated to
+        :data:`MULTIRES_FRACTION` of its faces, prolongated by barycentric interpolation at
+        the closest coarse point, then refined by subspace iteration with the fine
+        factorization and Rayleigh--Ritz until their residuals are small, at most
+        :data:`MULTIRES_ITERATIONS` steps; other domains and small meshes take the Lanczos
+        path). Every method's pairs go through the same Rayleigh--Ritz step and certificate,
+        and any pair the count says is missing is searched for by Lanczos.
 
     Returns
     -------
@@ -108,7 +132,8 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
         ``"shift"`` (σ, None when no count was taken), ``"count"`` (eigenvalues below σ by
         inertia), ``"count_margin"``, ``"count_backward_error"``, ``"residuals"`` ((k,)
         :math:`\eta_i`), ``"abs_error"`` ((k,) :math:`\rho_S`, an estimate unless proved),
-        ``"searches"`` (Lanczos runs).
+        ``"searches"`` (Lanczos runs), ``"method"``, ``"first_search"`` (the solver of the
+        first search: ``"lanczos"`` where ``"multires"`` does not apply).
 
     Examples
     --------
@@ -129,6 +154,8 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     tol = as_tol(tol, "tol", allow_zero=True)
     if not isinstance(return_info, (bool, np.bool_)):
         raise TypeError(f"return_info must be True or False, got {describe(return_info)}")
+    if not isinstance(method, str) or method not in EIG_METHODS:
+        raise ValueError(f"method must be one of {EIG_METHODS}, got {describe(method)}")
     backend = check_backend(backend)
     if progress is not None:
         as_flag(progress, "progress")
@@ -139,7 +166,7 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     Z = lap.component_basis()  # sparse (n, c), B-orthonormal basis of ker L
     if k <= c and not return_info:   # exact: the component indicators
         return np.zeros(k), Z[:, :k].toarray()
-    vals, X, info = _certified_pairs(lap, k, tol, backend, progress)
+    vals, X, info = _certified_pairs(lap, k, tol, backend, progress, method)
     if not info["count_certified"]:
         warnings.warn(f"eigs: the {k} smallest eigenvalues could not be certified by an inertia count "
                       f"({info['searches']} Lanczos searches, count {info['count']} below the shift "
@@ -149,7 +176,7 @@ def eigs(lap: Laplacian, k: int, tol: float = 0.0, backend: str = "auto", progre
     return (vals, X, info) if return_info else (vals, X)
 
 
-def _certified_pairs(lap, k, tol, backend, progress):
+def _certified_pairs(lap, k, tol, backend, progress, method="lanczos"):
     """Pairs (at least k of them) and their certificate: Lanczos searches until the count agrees."""
     n, c = lap.n, lap.n_components
     Zd = lap.component_basis().toarray()
@@ -157,6 +184,7 @@ def _certified_pairs(lap, k, tol, backend, progress):
     want = max(k - c, 1) + extra
     bar = progress_bar(None, f"eigs k={k}", progress, unit="solve")
     fac, kept = None, np.zeros((n, 0))    # kept: non-kernel pairs trusted by the last count
+    first = method
     for search in range(1, MAX_SEARCHES + 1):
         if want >= n - c - kept.shape[1] - 1 or n - c - kept.shape[1] <= 3:
             # too few modes left for ARPACK (ncv < dimension of the complement): all of them
@@ -169,7 +197,13 @@ def _certified_pairs(lap, k, tol, backend, progress):
             bar.set_postfix_str("factorization")
             fac = factorize(lap.L + s * lap.B, backend=backend)
             bar.set_postfix_str("Lanczos")
-        new = _lanczos(lap, fac, s, lap.component_basis(), kept, want, tol, search, bar)
+        new = None
+        if method == "multires" and search == 1:
+            new = _multires(lap, fac, s, want, tol, backend, bar)
+            first = "multires" if new is not None else "lanczos"
+        if new is None:
+            solver = krylov_schur if method == "krylov_schur" else _lanczos
+            new = solver(lap, fac, s, lap.component_basis(), kept, want, tol, search, bar)
         theta, Xn = _rayleigh_ritz(lap, np.hstack([kept, new]))
         vals, X = np.concatenate([np.zeros(c), theta]), np.hstack([Zd, Xn])
         info = _certificate(lap, vals, X, k)
@@ -182,7 +216,7 @@ def _certified_pairs(lap, k, tol, backend, progress):
         else:                            # no usable gap among the pairs: search further up
             kept, want, extra = Xn, 2 * extra, 2 * extra
     bar.close()
-    info["searches"] = search
+    info["searches"], info["method"], info["first_search"] = search, method, first
     del info["status"], info["count_below"]
     return vals, X, info
 
@@ -208,6 +242,42 @@ def _lanczos(lap, fac, s, Z, W, m, tol, seed, bar):
     ncv = min(free - 1, max(2 * m + 1, m + 32))
     _, vecs = spla.eigsh(lap.L, k=m, M=B, sigma=-s, which="LM", OPinv=Op, v0=v0, tol=tol, ncv=ncv)
     return vecs
+
+
+def _multires(lap, fac, s, m, tol, backend, bar):
+    r"""(n, m) pairs nearest -s from a coarse mesh (see :func:`eigs`, ``method="multires"``), or
+    None where the method does not apply (not a triangle mesh, or too small to coarsen)."""
+    V, F = lap.data.get("V"), lap.data.get("F")
+    c = lap.n_components
+    if lap.domain != "triangle" or V is None or F is None or np.shape(F)[1] != 3:
+        return None
+    faces = max(int(MULTIRES_FRACTION * len(F)), MULTIRES_MIN_FACES * (m + c))
+    if faces > 0.5 * len(F):
+        return None
+    from ..laplacian import laplacian
+
+    Vc, Fc = coarse_mesh(V, F, faces)
+    coarse = laplacian(Vc, Fc, mass="lumped" if lap.lumped else "full")
+    p = m + max(8, m // 2)                     # the block, with room for convergence
+    kc = min(coarse.n - 2, coarse.n_components + p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        Xc = eigs(coarse, kc, backend=backend)[1][:, coarse.n_components:]
+    Z = lap.component_basis()
+
+    def project(y):
+        return y - Z @ (Z.T @ (lap.B @ y))
+
+    X = subspace_refine(lap, fac, project(prolongation(V, F, Vc, Fc) @ Xc), project, 1, bar)
+    want = max(tol, 1e-10)
+    for _ in range(MULTIRES_ITERATIONS - 1):
+        theta = np.einsum("ij,ij->j", X, lap.L @ X)
+        R = lap.L @ X[:, :m] - (lap.B @ X[:, :m]) * theta[:m]
+        res = np.sqrt(np.sum(R * R / lap.mass[:, None], axis=0))
+        if np.all(res <= want * np.maximum(theta[:m], theta[min(m, X.shape[1] - 1)])):
+            break
+        X = subspace_refine(lap, fac, X, project, 1, bar)
+    return X[:, :m]
 
 
 def _rayleigh_ritz(lap, X):
