@@ -336,7 +336,9 @@ def test_bad_arguments(tmp_path):
     assert a < b and 10 * (a - collection.engine.BASE_BYTES) < b - collection.engine.BASE_BYTES and c > a
 
 
-def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
+def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
+    from distributed import Client, LocalCluster
+
     from spectral_igl.collection import engine
 
     shapes = _shapes()
@@ -344,7 +346,10 @@ def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
     real = engine.estimate_memory
     monkeypatch.setattr(engine, "estimate_memory",
                         lambda n, nnz, domain="triangle", job=None: 10 ** 15 if n == big else real(n, nnz, domain, job))
-    s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
+    # the memory is estimated in the task: a worker thread in this process sees the patch
+    with LocalCluster(n_workers=1, processes=False, threads_per_worker=1, memory_limit="4GB",
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
     assert sorted(s.done) == sorted(shapes)
     res = collection.load(tmp_path / "big.zarr").results
     assert res["torus"].meta.get("run_alone") is True and "run_alone" not in res["sphere"].meta
