@@ -355,3 +355,70 @@ def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
     assert res["torus"].meta.get("run_alone") is True and "run_alone" not in res["sphere"].meta
     assert res["torus"].meta["memory_estimate_bytes"] == 10 ** 15
     assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
+
+
+def _hks_slowly(name, lap):
+    """HKS at two times, a little slower than it needs to be, so that a run lasts a few seconds."""
+    time.sleep(0.15)
+    return sig.hks(lap, [0.01, 0.1])
+
+
+def _spawn(args, env, log):
+    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
+                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
+
+
+def test_scheduler_and_workers_on_loopback(tmp_path):
+    """A separate scheduler and worker processes on 127.0.0.1, a worker killed and one added
+    mid-run: every shape is done once, bitwise equal to the single-process result."""
+    import threading
+
+    from spectral_igl.linalg.threads import blas_threads
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"),
+                                                       os.environ.get("PYTHONPATH", "")]),
+               OPENBLAS_NUM_THREADS="1")
+    sched_file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "cluster.log", "w")
+    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                     "--scheduler-file", str(sched_file)], env, log)]
+    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
+              "--no-dashboard", "--host", "127.0.0.1", "--memory-limit", "2GB"]
+    V, F = icosphere(3)
+    shapes = {f"s{i:02d}": (V * (1.0 + 0.05 * i), F) for i in range(30)}
+    out = tmp_path / "loop.zarr"
+    try:
+        deadline = time.time() + 20
+        while not sched_file.is_file() and time.time() < deadline:
+            time.sleep(0.1)
+        procs += [_spawn(worker, env, log), _spawn(worker, env, log)]
+        from distributed import Client
+
+        with Client(scheduler_file=str(sched_file), timeout=20) as client:
+            client.wait_for_workers(2, timeout=30)
+            result = {}
+            run = threading.Thread(target=lambda: result.update(s=collection.run(
+                shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
+            run.start()
+            while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
+                time.sleep(0.02)
+            os.killpg(procs[1].pid, signal.SIGKILL)          # a worker dies mid-run
+            procs.append(_spawn(worker, env, log))           # and another one joins
+            run.join(timeout=60)
+            assert not run.is_alive()
+            workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+        log.close()
+    s = result["s"]
+    assert sorted(s.done) == sorted(shapes) and s.ok, str(s)
+    assert len(workers_seen) >= 2
+    res = collection.load(out).results
+    for name, (Vi, Fi) in shapes.items():
+        with blas_threads(1):
+            expect = sig.hks(sig.laplacian(Vi, Fi), [0.01, 0.1])
+        assert np.array_equal(res[name]["result"], expect), name
