@@ -64,7 +64,6 @@ class RunSummary:
     damaged: dict = field(default_factory=dict)    # name -> what was damaged (recomputed)
     seconds: float = 0.0
     workers: int = 0
-    timings: dict = field(default_factory=dict, repr=False)   # name -> seconds inside the task
 
     @property
     def ok(self) -> bool:
@@ -698,7 +697,6 @@ def _dispatch(client, tasks, job, out, limit, retries, slots, summary, bar, too_
             for r in f.result():
                 if r["status"] == "done":
                     summary.done.append(r["name"])
-                    summary.timings[r["name"]] = r
                     bar.update(done=1)
                 elif r["status"] == "too_large":
                     too_large.append(meta[r["name"]] + (r["estimate"],))

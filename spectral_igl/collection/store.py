@@ -7,8 +7,9 @@ Layout of ``out`` (a directory; Zarr format 3)::
     out/.partial/            groups being written; never read as results
 
 A shape's group is first written completely under ``.partial/`` (arrays, then attributes,
-then a sync of the file system, one for a batch of groups), and only then renamed to ``out/<name>``: a rename within one file system is
-atomic, so a reader sees either the whole previous record, nothing, or the whole new one.
+then a sync of the file system, one for a batch of groups), and only then renamed to
+``out/<name>``: a rename within one file system is atomic, so a reader sees either the
+whole previous record, nothing, or the whole new one.
 
 The group's attributes are its completion record: with ``status`` they list every array's
 shape, dtype and SHA-256 (``checksums``). :func:`check_record` compares the stored arrays
@@ -33,8 +34,8 @@ import numpy as np
 
 from .._extras import require
 
-__all__ = ["ShapeResult", "Loaded", "load", "write_record", "stage_record", "publish", "read_record", "check_record",
-           "clean_partial", "check_name", "lock_store", "StoreInUse", "PARTIAL", "LOCK", "LAYOUT",
+__all__ = ["ShapeResult", "Loaded", "load", "write_record", "stage_record", "publish",
+           "read_record", "check_record", "clean_partial", "check_name", "lock_store", "StoreInUse", "PARTIAL", "LOCK", "LAYOUT",
            "BOUND_SUFFIX"]
 
 PARTIAL = ".partial"
@@ -293,7 +294,9 @@ def _write_array(group: Path, key: str, a: np.ndarray) -> None:
                        config={"write_empty_chunks": True})
         return
     a = np.ascontiguousarray(a, dtype=a.dtype.newbyteorder("<") if a.dtype.itemsize > 1 else a.dtype)
-    codec = {"name": "bytes"} if a.dtype.itemsize == 1 else {"name": "bytes", "configuration": {"endian": "little"}}
+    codec = {"name": "bytes"}
+    if a.dtype.itemsize > 1:
+        codec["configuration"] = {"endian": "little"}
     where = group / key
     where.mkdir()
     _write_json(where / "zarr.json", {
