@@ -365,6 +365,8 @@ def stage_record(out, name, attrs: dict, arrays: dict | None = None) -> Path:
     sums = {}
     for key, value in (arrays or {}).items():
         a = np.ascontiguousarray(value)
+        if a.dtype.byteorder not in "=|":     # read back in native order: checksum that
+            a = a.astype(a.dtype.newbyteorder("="))
         _write_array(tmp, str(key), a)
         sums[str(key)] = _checksum(a)
     meta = dict(attrs)
