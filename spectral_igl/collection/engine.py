@@ -393,19 +393,14 @@ def process_batch(shapes, job: Job, out: str, metas, limit=None) -> list:
             with blas_threads(1):
                 record, arrays = _compute(shape, job, meta, limit)
             if record["status"] != "too_large":
-                t = time.perf_counter()
                 staged.append((shape.name, stage_record(out, shape.name, record, arrays)))
-                record["timings"]["stage"] = time.perf_counter() - t
             results.append(_summary(record))
             del arrays
-        t = time.perf_counter()
         publish(out, staged)
     except BaseException:
         for _, tmp in staged:      # never published: removed, not left for the next run
             shutil.rmtree(tmp, ignore_errors=True)
         raise
-    for r in results:
-        r["publish"] = (time.perf_counter() - t) / max(len(staged), 1)
     return results
 
 
