@@ -487,7 +487,7 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
         ``None``: a ``LocalCluster`` with ``workers`` single-threaded processes, each with
         ``memory_limit``; an address (``"tcp://host:8786"``) or a ``Client``: that cluster.
     progress : bool
-        dask's text progress bar on stdout.
+        A progress line on stdout (shapes finished of all, rate, failures, time left).
     retries : int
         Times a task that raised is resubmitted (the shape's own errors are recorded, not
         raised: this covers a store that could not be written). A task whose worker died
