@@ -425,14 +425,11 @@ def _as_job(job) -> Job:
 
 
 def _local_cluster(n, memory_limit, silence):
-    """A LocalCluster of ``n`` single-threaded worker processes, without dask's sampling
-    profiler (it takes the GIL from the task thread every 10 ms, for nothing we read)."""
-    import dask
+    """A LocalCluster of ``n`` single-threaded worker processes."""
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.worker.profile.enabled": False}):
-        return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                            memory_limit=memory_limit, dashboard_address=None, silence_logs=silence)
+    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, memory_limit=memory_limit,
+                        dashboard_address=None, silence_logs=silence)
 
 
 def _connect(scheduler, workers, memory_limit, silence):
