@@ -5,10 +5,19 @@ function, so that every shape gets the same relative scales), on the shared mesh
 plain loop reads, builds the Laplacian and computes, and keeps nothing; ``run`` also hashes
 the inputs, estimates memory, schedules, and writes one Zarr group per shape.
 
-The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
-many small shapes: (wall time of the run − cluster start − time spent inside the tasks) / shapes.
+The machine may be shared, so every row also gives CPU time: the loop's, the sum inside the
+tasks (``time.process_time`` of the worker around each shape) and the client's (which, on a
+local cluster, also runs the scheduler). "in-task / loop" compares the CPU of the same work
+in a worker and in the loop; "predicted on a quiet machine" is the wall time the CPU
+accounting implies on ``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all
+CPU spent divided by the cores, whichever is larger, plus the cluster's start and stop.
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py
+The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
+many small shapes: (wall − cluster start − time inside the tasks / workers) / shapes.
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --small 100           # the table
+    OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --count 1000 --only-count   # 1,000 shapes
+    OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --loopback --only-loopback  # dask CLI
     OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --memory   # estimate vs peak RSS
 """
 from __future__ import annotations
@@ -16,10 +25,13 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -40,15 +52,29 @@ def n_vertices(name, lap):
     return np.array([lap.n])
 
 
+def load_avg() -> str:
+    return " ".join(open("/proc/loadavg").read().split()[:3]) if os.path.exists("/proc/loadavg") \
+        else f"{os.getloadavg()[0]:.2f}"
+
+
+def client_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def plain_loop(paths, fn):
+    """(wall, CPU, CPU of the job alone) of read + Laplacian + job over ``paths``."""
     import spectral_igl as sig
     from spectral_igl.io import read_mesh
 
-    t = time.perf_counter()
+    t, c, job_cpu = time.perf_counter(), time.process_time(), 0.0
     for p in paths:
         V, C = read_mesh(p)
-        fn(Path(p).stem, sig.laplacian(V, C))
-    return time.perf_counter() - t
+        lap = sig.laplacian(V, C)
+        c1 = time.process_time()
+        fn(Path(p).stem, lap)
+        job_cpu += time.process_time() - c1
+    return time.perf_counter() - t, time.process_time() - c, job_cpu
 
 
 def cluster_start(workers):
@@ -64,21 +90,253 @@ def cluster_start(workers):
     return up, time.perf_counter() - t
 
 
-def timed_run(inputs, job, out, workers):
+def task_times(out):
+    """Per-shape timings of a store: sums of wall and CPU inside the tasks, CPU per worker."""
+    from spectral_igl import collection
+
+    res = collection.load(out, arrays=False).results
+    inside = sum(r.meta["timings"]["total"] for r in res.values())
+    cpu = sum(r.meta["timings"]["cpu"] for r in res.values())
+    job_cpu = sum(r.meta["timings"].get("compute_cpu", 0.0) for r in res.values())
+    compute = sum(r.meta["timings"].get("compute", 0.0) for r in res.values())
+    per_worker = {}
+    for r in res.values():
+        key = (r.meta["host"], r.meta["pid"])
+        per_worker[key] = per_worker.get(key, 0.0) + r.meta["timings"]["cpu"]
+    return dict(inside=inside, cpu=cpu, job_cpu=job_cpu, compute=compute, per_worker=per_worker, n=len(res))
+
+
+def timed_run(inputs, job, out, workers, **kw):
     from spectral_igl import collection
 
     shutil.rmtree(out, ignore_errors=True)
+    c0 = client_cpu()
     t = time.perf_counter()
-    s = collection.run(inputs, job, out, workers=workers, progress=False)
+    s = collection.run(inputs, job, out, workers=workers, progress=False, **kw)
     wall = time.perf_counter() - t
+    ccpu = client_cpu() - c0
     assert s.ok, str(s)
-    res = collection.load(out, arrays=False).results
-    inside = sum(r.meta["timings"]["total"] for r in res.values())
+    tt = task_times(out)
     t = time.perf_counter()
     s2 = collection.run(inputs, job, out, workers=workers, progress=False)
     rerun = time.perf_counter() - t
-    assert len(s2.skipped) == len(res)
-    return wall, inside, rerun
+    assert len(s2.skipped) == tt["n"]
+    return dict(wall=wall, client_cpu=ccpu, rerun=rerun, **tt)
+
+
+def speed_table(paths, tmp):
+    from spectral_igl.collection import Job
+
+    cores = os.cpu_count() or 1
+    job = Job.function(hks_relative)
+    print(f"load average before: {load_avg()}")
+    lw, lc, ljob = plain_loop(paths, hks_relative)
+    n = len(paths)
+    print("\n| | wall (s) | shapes per minute | CPU (s): tasks / busiest worker / client | job CPU in-task / loop "
+          f"| predicted on {cores} quiet cores, without / with the cluster start (s) | predicted speed-up "
+          "over the loop, without / with | rerun, all skipped (s) |")
+    print("|---|---|---|---|---|---|---|---|")
+    print(f"| plain loop | {lw:.1f} | {60 * n / lw:.0f} | {lc:.1f} | 1 | {lc:.1f} | 1 | |")
+    for w in (1, 2):
+        up, updown = cluster_start(w)
+        r = timed_run(paths, job, tmp / f"w{w}.zarr", w)
+        busiest = max(r["per_worker"].values())
+        # the client's CPU includes the cluster's start and stop (and, locally, the scheduler)
+        pred = max(busiest, (r["cpu"] + r["client_cpu"]) / cores)
+        print(f"| run, {w} worker{'s' if w > 1 else ''} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
+              f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
+              f"{pred:.1f} / {pred + updown:.1f} | {lc / pred:.2f} / {lc / (pred + updown):.2f} | "
+              f"{r['rerun']:.2f} |")
+    print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; cluster start + stop measured apart; "
+          f"load average after: {load_avg()}")
+
+
+def overhead(n_small, tmp):
+    from data_generators import icosphere
+
+    from spectral_igl.collection import Job
+
+    V, F = icosphere(1)
+    small = [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(n_small)]
+    for w in (1, 2):
+        up, updown = cluster_start(w)
+        r = timed_run(small, Job.function(n_vertices), tmp / f"o{w}.zarr", w)
+        over = (r["wall"] - updown - r["compute"] / w) / len(small)
+        print(f"overhead, {len(small)} shapes of {len(V)} vertices, {w} worker(s): wall {r['wall']:.2f} s, "
+              f"cluster start + stop {updown:.2f} s, job inside the tasks {r['compute']:.3f} s, "
+              f"task CPU {1e3 * r['cpu'] / len(small):.1f} ms/shape, client CPU "
+              f"{1e3 * r['client_cpu'] / len(small):.1f} ms/shape (with the cluster's start): "
+              f"{1e3 * over:.1f} ms per shape; load {load_avg()}")
+
+
+# ---- a thousand shapes ----------------------------------------------------------------------
+def make_dataset(folder: Path, count: int, meshes: Path, seed: int = 0):
+    """``count`` mesh files: mostly small (decimated and resampled public models, spheres,
+    tori; 100-3,000 vertices), 2.5 % mid-sized (about 10k vertices), and three large ones
+    (95k-141k vertices). Returns the paths."""
+    import igl
+
+    from data_generators import icosphere, torus
+    from data_generators.perturb import mean_edge_length, midpoint_subdivide, normal_noise, resample
+    from spectral_igl.io import read_mesh, write_mesh
+
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    models = {}
+    for name in ("spot.obj", "cow.obj", "homer.obj", "cheburashka.obj", "fertility.off", "rocker-arm.obj",
+                 "armadillo.obj", "stanford-bunny.obj"):
+        V, F = read_mesh(meshes / name)
+        models[Path(name).stem] = (np.asarray(V, float), np.asarray(F, np.int64))
+
+    def decimated(V, F, faces):
+        if len(F) <= faces:
+            return V, F
+        out = igl.decimate(V, F, faces)
+        U, G = (out[1], out[2]) if isinstance(out[0], (bool, np.bool_)) else (out[0], out[1])
+        return np.asarray(U, float), np.asarray(G, np.int64)
+
+    bases = [decimated(V, F, f) for V, F in models.values() for f in (400, 1000, 2500)]
+    mids = [decimated(V, F, 16000) for V, F in models.values()]
+    bases += [icosphere(2), icosphere(3), torus(1.0, 0.4, 32, 12), torus(1.0, 0.3, 48, 16)]
+    large = [resample(*models["armadillo"], 1.0, seed=1),                  # 129k vertices
+             midpoint_subdivide(*models["stanford-bunny"]),                 # 141k vertices
+             resample(*models["armadillo"], 0.6, seed=2)]                   # 95k vertices
+    n_mid = max(1, count // 40)
+    paths = []
+    for i in range(count):
+        if i < len(large):
+            V, F = large[i]
+        elif i < len(large) + n_mid:
+            V, F = resample(*mids[i % len(mids)], 0.5, seed=i)          # about 10k vertices
+        else:
+            V, F = bases[rng.integers(len(bases))]
+            V, F = resample(V, F, float(rng.uniform(0.1, 0.6)), seed=i)
+            V = normal_noise(V, F, 0.05 * mean_edge_length(V, F), seed=i)
+        p = folder / f"shape{i:05d}{'.off' if i % 2 else '.obj'}"
+        write_mesh(p, V, F)
+        paths.append(str(p))
+    return paths
+
+
+_RUN = """
+import sys
+sys.path.insert(0, {bench!r})
+from collection import hks_relative
+from spectral_igl import collection
+from spectral_igl.collection import Job
+if __name__ == "__main__":
+    collection.run({folder!r}, Job.function(hks_relative), {out!r}, workers=2, progress=False)
+"""
+
+
+def thousand(count, meshes, tmp, keep=None):
+    from spectral_igl import collection
+    from spectral_igl.collection import Job
+
+    folder = Path(keep) if keep else tmp / "dataset"
+    t = time.perf_counter()
+    paths = sorted(str(p) for p in folder.glob("shape*")) if folder.is_dir() else []
+    if len(paths) != count:
+        shutil.rmtree(folder, ignore_errors=True)
+        paths = make_dataset(folder, count, meshes)
+    from spectral_igl.io import read_mesh
+
+    sizes = sorted(len(read_mesh(p)[0]) for p in paths[:3] + paths[3:][::50])
+    print(f"{count} shapes in {folder} ({time.perf_counter() - t:.0f} s to make or find); sampled sizes "
+          f"{sizes[0]}..{sizes[-1]} vertices, median {sizes[len(sizes) // 2]}; load {load_avg()}")
+    out = tmp / "thousand.zarr"
+    shutil.rmtree(out, ignore_errors=True)
+    # 1. killed part-way (the whole process group), then resumed
+    script = tmp / "run.py"
+    script.write_text(_RUN.format(bench=str(Path(__file__).parent), folder=str(folder), out=str(out)))
+    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        while proc.poll() is None and sum(1 for _ in out.glob("shape*")) < count // 3:
+            time.sleep(0.2)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    first = sum(1 for _ in out.glob("shape*"))
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    c0, t = client_cpu(), time.perf_counter()
+    s = collection.run(str(folder), Job.function(hks_relative), out, workers=2, progress=True)
+    wall, ccpu = time.perf_counter() - t, client_cpu() - c0
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    assert s.ok, str(s)
+    tt = task_times(out)
+    print(f"killed after {first} groups; resumed: {len(s.skipped)} skipped, {len(s.done)} done in {wall:.1f} s "
+          f"({60 * len(s.done) / wall:.0f} shapes/min); task CPU {tt['cpu']:.0f} s in all, client CPU "
+          f"{ccpu:.1f} s; client peak RSS {rss0 / 1024:.0f} MB before the run, {rss1 / 1024:.0f} MB after; "
+          f"load {load_avg()}")
+    t = time.perf_counter()
+    s2 = collection.run(str(folder), Job.function(hks_relative), out, workers=2, progress=False)
+    print(f"restart with every shape done: {len(s2.skipped)} skipped in {time.perf_counter() - t:.2f} s")
+    res = collection.load(out, arrays=False).results
+    small = [r.meta for r in res.values() if r.meta["n"] <= 5000]
+    print(f"small shapes (n <= 5000): {len(small)}, mean n {np.mean([m['n'] for m in small]):.0f}, "
+          f"mean in-task wall {1e3 * np.mean([m['timings']['total'] for m in small]):.0f} ms, of which the "
+          f"job {1e3 * np.mean([m['timings']['compute'] for m in small]):.0f} ms; largest n "
+          f"{max(r.meta['n'] for r in res.values())}")
+
+
+# ---- a scheduler and workers started as separate processes -------------------------------------
+def _spawn(args, env, log):
+    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
+                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
+
+
+def loopback(paths, tmp, workers=3):
+    """``dask scheduler`` and ``workers`` ``dask worker`` processes on 127.0.0.1; one worker
+    killed at a third of the shapes and one added; the results against a 1-worker run."""
+    from distributed import Client
+
+    from spectral_igl import collection
+    from spectral_igl.collection import Job
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[1]),
+                                                       os.environ.get("PYTHONPATH", "")]))
+    sched_file, log = tmp / "scheduler.json", open(tmp / "cluster.log", "w")
+    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                     "--scheduler-file", str(sched_file)], env, log)]
+    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1", "--no-dashboard",
+              "--host", "127.0.0.1", "--memory-limit", "4GB"]
+    out, ref = tmp / "loopback.zarr", tmp / "single.zarr"
+    job = Job.function(hks_relative)
+    try:
+        while not sched_file.is_file():
+            time.sleep(0.1)
+        procs += [_spawn(worker, env, log) for _ in range(workers)]
+        with Client(scheduler_file=str(sched_file), timeout=30) as client:
+            client.wait_for_workers(workers, timeout=60)
+            box = {}
+            t = time.perf_counter()
+            th = threading.Thread(target=lambda: box.update(s=collection.run(
+                paths, job, out, scheduler=client, progress=False)))
+            th.start()
+            while th.is_alive() and sum(1 for p in out.glob("*") if not p.name.startswith(".")
+                                        and (p / "zarr.json").is_file()) < len(paths) // 3:
+                time.sleep(0.05)
+            os.killpg(procs[1].pid, signal.SIGKILL)
+            killed_at = time.perf_counter() - t
+            procs.append(_spawn(worker, env, log))
+            th.join()
+            wall = time.perf_counter() - t
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+        log.close()
+    s = box["s"]
+    collection.run(paths, job, ref, workers=1, progress=False)
+    a, b = collection.load(out).results, collection.load(ref).results
+    same = all(np.array_equal(a[k]["result"], b[k]["result"]) for k in b)
+    pids = {r.meta["pid"] for r in a.values()}
+    print(f"loopback: {len(s.done)} done, {len(s.failed)} failed in {wall:.1f} s on {workers} workers, one "
+          f"killed at {killed_at:.1f} s and one added; results from {len(pids)} worker processes; "
+          f"bitwise equal to a 1-worker LocalCluster run: {same}; load {load_avg()}")
 
 
 def memory_table(paths):
@@ -115,11 +373,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", default=str(MESHES), help="folder of meshes (default: the shared meshes)")
     ap.add_argument("--small", type=int, default=200, help="small shapes of the overhead run")
+    ap.add_argument("--count", type=int, default=0, help="also a run over this many generated shapes")
+    ap.add_argument("--dataset", default=None, help="folder to keep the generated shapes in (reused)")
+    ap.add_argument("--only-count", action="store_true", help="only the --count run")
+    ap.add_argument("--loopback", action="store_true",
+                    help="also dask scheduler + dask worker processes on 127.0.0.1, one killed, one added")
+    ap.add_argument("--only-loopback", action="store_true", help="only the loopback run")
     ap.add_argument("--memory", action="store_true", help="also the memory estimate against peak RSS")
     ap.add_argument("--only-memory", action="store_true", help="only the memory table")
     args = ap.parse_args()
-    from spectral_igl.collection import Job
-
     folder = Path(args.meshes)
     paths = sorted(str(p) for p in folder.iterdir() if p.suffix in (".obj", ".off", ".mesh"))
     if not paths:
@@ -129,35 +391,20 @@ def main():
     if args.only_memory:
         memory_table(paths)
         return
-    job = Job.function(hks_relative)
     tmp = Path(tempfile.mkdtemp(prefix="collection-bench-"))
     try:
-        loop = plain_loop(paths, hks_relative)
-        rows = [("plain loop", loop, None, loop, None)]
-        for w in (1, 2):
-            up, updown = cluster_start(w)
-            wall, inside, rerun = timed_run(paths, job, tmp / f"w{w}.zarr", w)
-            rows.append((f"run, {w} worker{'s' if w > 1 else ''}", wall, updown, inside, rerun))
-        n = len(paths)
-        print("\n| | wall (s) | shapes per minute | cluster start + stop (s) | time inside the tasks, summed (s) | rerun, all skipped (s) |")
-        print("|---|---|---|---|---|---|")
-        for label, wall, updown, inside, rerun in rows:
-            extra = "" if updown is None else f"{updown:.1f}"
-            rr = "" if rerun is None else f"{rerun:.2f}"
-            print(f"| {label} | {wall:.1f} | {60 * n / wall:.0f} | {extra} | {inside:.1f} | {rr} |")
-        print(f"load average after the runs: {os.getloadavg()[0]:.1f}")
-
-        from data_generators import icosphere
-
-        V, F = icosphere(1)
-        small = [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(args.small)]
-        for w in (1, 2):
-            up, updown = cluster_start(w)
-            wall, inside, _ = timed_run(small, Job.function(n_vertices), tmp / f"o{w}.zarr", w)
-            over = (wall - updown - inside / w) / len(small)
-            print(f"\noverhead, {len(small)} shapes of {len(V)} vertices, {w} worker(s): wall {wall:.1f} s, "
-                  f"cluster start + stop {updown:.1f} s, inside the tasks {inside:.2f} s in all: "
-                  f"{1e3 * over:.1f} ms per shape")
+        if args.only_count:
+            thousand(args.count or 1000, folder, tmp, args.dataset)
+            return
+        if args.only_loopback:
+            loopback(paths, tmp)
+            return
+        speed_table(paths, tmp)
+        overhead(args.small, tmp)
+        if args.count:
+            thousand(args.count, folder, tmp, args.dataset)
+        if args.loopback:
+            loopback(paths, tmp)
         if args.memory:
             memory_table(paths)
     finally:

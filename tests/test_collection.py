@@ -336,7 +336,9 @@ def test_bad_arguments(tmp_path):
     assert a < b and 10 * (a - collection.engine.BASE_BYTES) < b - collection.engine.BASE_BYTES and c > a
 
 
-def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
+def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
+    from distributed import Client, LocalCluster
+
     from spectral_igl.collection import engine
 
     shapes = _shapes()
@@ -344,9 +346,106 @@ def test_shapes_above_the_worker_limit_run_alone(client, tmp_path, monkeypatch):
     real = engine.estimate_memory
     monkeypatch.setattr(engine, "estimate_memory",
                         lambda n, nnz, domain="triangle", job=None: 10 ** 15 if n == big else real(n, nnz, domain, job))
-    s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
+    # the memory is estimated in the task: a worker thread in this process sees the patch
+    with LocalCluster(n_workers=1, processes=False, threads_per_worker=1, memory_limit="4GB",
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        s = collection.run(shapes, Job.hks([0.1]), tmp_path / "big.zarr", scheduler=client, progress=False)
     assert sorted(s.done) == sorted(shapes)
     res = collection.load(tmp_path / "big.zarr").results
     assert res["torus"].meta.get("run_alone") is True and "run_alone" not in res["sphere"].meta
     assert res["torus"].meta["memory_estimate_bytes"] == 10 ** 15
     assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
+
+
+def _hks_slowly(name, lap):
+    """HKS at two times, a little slower than it needs to be, so that a run lasts a few seconds."""
+    time.sleep(0.15)
+    return sig.hks(lap, [0.01, 0.1])
+
+
+def _spawn(args, env, log):
+    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
+                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
+
+
+def test_scheduler_and_workers_on_loopback(tmp_path):
+    """A separate scheduler and worker processes on 127.0.0.1, a worker killed and one added
+    mid-run: every shape is done once, bitwise equal to the single-process result."""
+    import threading
+
+    from spectral_igl.linalg.threads import blas_threads
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"),
+                                                       os.environ.get("PYTHONPATH", "")]),
+               OPENBLAS_NUM_THREADS="1")
+    sched_file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "cluster.log", "w")
+    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                     "--scheduler-file", str(sched_file)], env, log)]
+    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
+              "--no-dashboard", "--host", "127.0.0.1", "--memory-limit", "2GB"]
+    V, F = icosphere(3)
+    shapes = {f"s{i:02d}": (V * (1.0 + 0.05 * i), F) for i in range(30)}
+    out = tmp_path / "loop.zarr"
+    try:
+        deadline = time.time() + 20
+        while not sched_file.is_file() and time.time() < deadline:
+            time.sleep(0.1)
+        procs += [_spawn(worker, env, log), _spawn(worker, env, log)]
+        from distributed import Client
+
+        with Client(scheduler_file=str(sched_file), timeout=20) as client:
+            client.wait_for_workers(2, timeout=30)
+            result = {}
+            run = threading.Thread(target=lambda: result.update(s=collection.run(
+                shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
+            run.start()
+            while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
+                time.sleep(0.02)
+            os.killpg(procs[1].pid, signal.SIGKILL)          # a worker dies mid-run
+            procs.append(_spawn(worker, env, log))           # and another one joins
+            run.join(timeout=60)
+            assert not run.is_alive()
+            workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+        log.close()
+    s = result["s"]
+    assert sorted(s.done) == sorted(shapes) and s.ok, str(s)
+    assert len(workers_seen) >= 2
+    res = collection.load(out).results
+    for name, (Vi, Fi) in shapes.items():
+        with blas_threads(1):
+            expect = sig.hks(sig.laplacian(Vi, Fi), [0.01, 0.1])
+        assert np.array_equal(res[name]["result"], expect), name
+
+
+def test_store_writes_arrays_zarr_reads(tmp_path):
+    """Numeric arrays are written as Zarr v3 files directly: zarr reads them back exactly,
+    and a truncated chunk is damage, never a result."""
+    import zarr
+
+    from spectral_igl.collection.store import check_record, write_record
+
+    arrays = {"f": np.arange(6.0).reshape(3, 2) / 7, "i": np.arange(-2, 3, dtype=np.int32),
+              "u": np.arange(3, dtype=np.uint8), "b": np.array([True, False, True]),
+              "c": np.array([1 + 2j, -0.5j]), "be": np.arange(4, dtype=">f8"), "e": np.zeros((0, 3)),
+              "t": np.arange(24.0).reshape(2, 3, 4)}
+    out = tmp_path / "s.zarr"
+    write_record(out, "x", {"status": "done"}, arrays)
+    g = zarr.open_group(str(out / "x"), mode="r")
+    assert g.attrs["status"] == "done"
+    attrs, back, problem = check_record(out, "x")
+    assert problem is None
+    for key, a in arrays.items():
+        z = np.asarray(g[key][...])
+        assert z.shape == a.shape and np.array_equal(z, a) and z.dtype == a.dtype.newbyteorder("="), key
+        assert np.array_equal(back[key], a) and back[key].dtype == z.dtype, key
+    chunk = out / "x" / "f" / "c" / "0" / "0"
+    chunk.write_bytes(chunk.read_bytes()[:-8])
+    assert "'f' cannot be read" in check_record(out, "x")[2]
+    assert collection.load(out).failures[0]["damaged"] is True

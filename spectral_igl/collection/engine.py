@@ -8,9 +8,12 @@ import logging
 import math
 import os
 import resource
+import shutil
 import socket
 import time
+import sys
 import traceback
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,15 +23,20 @@ from .._extras import require
 from .._validate import as_flag, describe
 from .._version import __version__
 from .jobs import Job
-from .store import check_name, check_record, clean_partial, lock_store, open_root, read_record, write_record
+from .store import (check_name, check_record, clean_partial, lock_store, open_root, publish, read_record,
+                    stage_record, write_record)
 
 __all__ = ["run", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
-           "inspect_shape", "input_hash", "estimate_nnz"]
+           "process_batch", "inspect_shape", "input_hash", "estimate_nnz", "file_stat"]
 
 #: file types read by :func:`spectral_igl.io.read_mesh` (a directory input means these)
 MESH_TYPES = (".obj", ".off", ".ply", ".stl", ".wrl", ".mesh")
 #: fixed cost of one task in a worker (interpreter, libraries, mesh arrays), bytes
 BASE_BYTES = 64 * 2 ** 20
+#: shapes whose input is at most this many bytes are sent to the workers in batches
+SMALL_BYTES = 256 * 2 ** 10
+#: a batch holds at most this many shapes and this many input bytes
+BATCH_SHAPES, BATCH_BYTES = 64, 2 * 2 ** 20
 
 
 @dataclass
@@ -265,33 +273,71 @@ def _laplacian(V, C, options):
     return laplacian(V, C, weights=options.get("weights", "auto"), mass=options.get("mass", "lumped"))
 
 
-def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
-    """Read, build the Laplacian, run ``job`` and write the result (runs on a worker).
+def file_stat(path) -> list:
+    """``[size, mtime_ns]`` of a file: a rerun trusts a recorded hash while these are unchanged."""
+    st = os.stat(path)
+    return [int(st.st_size), int(st.st_mtime_ns)]
 
-    A failure of the shape is written as a ``"failed"`` record with its error text and
-    returned, never raised; only a failure to write the store raises (the scheduler then
-    retries the task).
+
+_MALLOC_TUNED = []
+
+
+def _tune_malloc() -> None:
+    """Undo dask's ``MALLOC_TRIM_THRESHOLD_`` in this worker process (glibc only; once).
+
+    dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also freezes
+    glibc's mmap threshold at 128 KiB: every large array of a factorization is then mapped
+    and unmapped afresh, and its pages faulted in again. Measured on stanford-bunny (HKS at
+    two times): 3.2 s of CPU in the task thread against 2.2 s in a plain process. The
+    thresholds set here are the largest glibc's own dynamic rule would reach (32 MiB mmap,
+    twice that for trimming), which restores the plain-process time.
     """
-    t0 = time.perf_counter()
+    if _MALLOC_TUNED:
+        return
+    _MALLOC_TUNED.append(True)
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 32 * 2 ** 20)     # M_MMAP_THRESHOLD
+        libc.mallopt(-1, 64 * 2 ** 20)     # M_TRIM_THRESHOLD
+    except (OSError, AttributeError):       # not glibc
+        pass
+
+
+def _compute(shape: Shape, job: Job, meta: dict, limit):
+    """``(record, arrays)`` of one shape; record status ``"too_large"`` when its memory
+    estimate exceeds ``limit`` (nothing computed)."""
+    t0, c0 = time.perf_counter(), time.process_time()
     timings = {}
     record = dict(meta, name=shape.name, source=shape.source, version=__version__,
                   host=socket.gethostname(), pid=os.getpid())
-    lap = None
+    lap, arrays = None, {}
     try:
         if shape.path is not None:    # the bytes actually read here
-            record["input_hash"] = input_hash(shape)
+            record["input_stat"] = file_stat(shape.path)
+        record["input_hash"] = input_hash(shape)
         V, C = _read(shape)
         record["mesh_hash"] = _digest(np.asarray(V, dtype=float),
                                       None if C is None else np.asarray(C, dtype=np.int64))
+        domain = "points" if C is None else ("tet" if np.asarray(C).shape[1] == 4 else "triangle")
+        est = estimate_memory(len(V), estimate_nnz(len(V), C), domain, job)
+        record["memory_estimate_bytes"] = est
         timings["read"] = time.perf_counter() - t0
+        if limit is not None and est > limit:
+            record["status"] = "too_large"
+            return record, arrays
         t = time.perf_counter()
         lap = _laplacian(V, C, meta.get("laplacian", {}))
         timings["laplacian"] = time.perf_counter() - t
         record.update(n=lap.n, nnz=int(lap.L.nnz), domain=lap.domain,
                       n_components=int(lap.n_components))
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         arrays, bounds = job(shape.name, lap)
         timings["compute"] = time.perf_counter() - t
+        timings["compute_cpu"] = time.process_time() - c
         record.update(status="done", bounds=bounds)
     except Exception as err:  # noqa: BLE001 - the shape's failure is recorded, others go on
         arrays = {}
@@ -302,12 +348,70 @@ def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
             lap.cache.clear()
         del lap
     timings["total"] = time.perf_counter() - t0
+    timings["cpu"] = time.process_time() - c0
     record["timings"] = timings
     record["worker_peak_rss_bytes"] = _peak_rss()
     record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    write_record(out, shape.name, record, arrays)
-    return {"name": shape.name, "status": record["status"], "error": record.get("error"),
-            "seconds": timings["total"]}
+    return record, arrays
+
+
+def _summary(record: dict) -> dict:
+    """What a task returns to the client for one shape (a few numbers, never the arrays)."""
+    t = record.get("timings", {})
+    return {"name": record["name"], "status": record["status"], "error": record.get("error"),
+            "seconds": t.get("total", 0.0), "compute": t.get("compute", 0.0),
+            "cpu": t.get("cpu", 0.0), "estimate": record.get("memory_estimate_bytes")}
+
+
+def _written_by(out, name, run_id) -> bool:
+    """True when this run already wrote ``name``'s result (a task retried after its worker died)."""
+    prev = read_record(out, name) if run_id else None
+    return prev is not None and prev.get("run_id") == run_id and prev.get("status") == "done"
+
+
+def process_batch(shapes, job: Job, out: str, metas, limit=None) -> list:
+    """Process several shapes in one task (runs on a worker); one summary dict per shape.
+
+    Each shape is computed with the BLAS limited to one thread (parallelism comes from
+    the worker processes) and staged under ``out/.partial``; the staged groups are then
+    made durable with one file-system sync and renamed into place together. A shape whose
+    memory estimate exceeds ``limit`` is not computed: its summary has status
+    ``"too_large"`` and the client runs it alone afterwards. A shape already written by
+    this run (``meta["run_id"]``; the task was retried after its worker died) is not
+    computed again.
+    """
+    from ..linalg.threads import blas_threads
+
+    _tune_malloc()
+    staged, results = [], []
+    try:
+        for shape, meta in zip(shapes, metas):
+            if _written_by(out, shape.name, meta.get("run_id")):
+                results.append({"name": shape.name, "status": "done", "error": None, "seconds": 0.0,
+                                "compute": 0.0, "cpu": 0.0, "estimate": None})
+                continue
+            with blas_threads(1):
+                record, arrays = _compute(shape, job, meta, limit)
+            if record["status"] != "too_large":
+                staged.append((shape.name, stage_record(out, shape.name, record, arrays)))
+            results.append(_summary(record))
+            del arrays
+        publish(out, staged)
+    except BaseException:
+        for _, tmp in staged:      # never published: removed, not left for the next run
+            shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return results
+
+
+def process_shape(shape: Shape, job: Job, out: str, meta: dict) -> dict:
+    """Read, build the Laplacian, run ``job`` and write the result (runs on a worker).
+
+    A failure of the shape is written as a ``"failed"`` record with its error text and
+    returned, never raised; only a failure to write the store raises (the scheduler then
+    retries the task).
+    """
+    return process_batch([shape], job, out, [meta])[0]
 
 
 # ---- the driver ---------------------------------------------------------------------------
@@ -320,17 +424,23 @@ def _as_job(job) -> Job:
                     f"fn(name, lap), got {describe(job)}")
 
 
+def _local_cluster(n, memory_limit, silence):
+    """A LocalCluster of ``n`` single-threaded worker processes."""
+    from distributed import LocalCluster
+
+    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, memory_limit=memory_limit,
+                        dashboard_address=None, silence_logs=silence)
+
+
 def _connect(scheduler, workers, memory_limit, silence):
     """(client, cluster or None, owned)."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is None:
         n = int(workers) if workers is not None else (os.cpu_count() or 1)
         if n < 1:
             raise ValueError(f"workers must be >= 1, got {workers!r}")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               memory_limit=memory_limit, dashboard_address=None,
-                               silence_logs=silence)
+        cluster = _local_cluster(n, memory_limit, silence)
         return Client(cluster), cluster, True
     if isinstance(scheduler, Client):
         return scheduler, None, False
@@ -341,13 +451,12 @@ def _connect(scheduler, workers, memory_limit, silence):
 
 
 def _worker_limits(client):
+    """``(workers, memory limit of one task or None, threads per worker)`` of the cluster."""
     info = client.scheduler_info()["workers"]
     limits = [w.get("memory_limit") or 0 for w in info.values()]
-    threads = [w.get("nthreads") or 1 for w in info.values()]
-    mem_res = [w.get("resources", {}).get("MEMORY") for w in info.values()]
-    limit = min(limits) if limits and all(limits) else None
-    res = min(mem_res) if mem_res and all(r is not None for r in mem_res) else None
-    return len(info), limit, max(threads, default=1), res
+    threads = max((w.get("nthreads") or 1 for w in info.values()), default=1)
+    limit = min(limits) // threads if limits and all(limits) else None
+    return len(info), limit, threads
 
 
 def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progress: bool = True,
@@ -375,7 +484,7 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
         ``None``: a ``LocalCluster`` with ``workers`` single-threaded processes, each with
         ``memory_limit``; an address (``"tcp://host:8786"``) or a ``Client``: that cluster.
     progress : bool
-        dask's text progress bar on stdout.
+        A progress line on stdout (shapes finished of all, rate, failures, time left).
     retries : int
         Times a task that raised is resubmitted (the shape's own errors are recorded, not
         raised: this covers a store that could not be written). A task whose worker died
@@ -402,11 +511,15 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     Notes
     -----
     Each shape's group is written atomically; a rerun recomputes only the shapes without
-    a current result. Before any work, each input is hashed and its size read (in
-    parallel on the workers); its memory is estimated (:func:`estimate_memory`). Shapes
-    that fit a worker's limit run in parallel, largest first; the others run afterwards
-    one at a time (on a local cluster: in a single worker given the memory of all). The
-    Laplacian's caches are cleared after every shape.
+    a current result. The client reads no input: tasks are dispatched at once, largest
+    input first, with a bounded number in flight; small inputs travel in batches of
+    several shapes per task (one scheduler round trip and one file-system sync per
+    batch). Each worker reads and hashes its inputs, estimates the peak memory
+    (:func:`estimate_memory`) and runs the job with the BLAS on one thread. A shape whose
+    estimate exceeds a worker's limit is handed back and runs afterwards one at a time
+    (on a local cluster: in a single worker given the memory of all). On a rerun a file
+    is hashed by the client only if its size or modification time differs from the
+    recorded ones. The Laplacian's caches are cleared after every shape.
 
     A stored result is skipped only when its group matches its completion record (every
     array's shape, dtype and SHA-256, see :func:`~spectral_igl.collection.store.check_record`);
@@ -436,23 +549,37 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
                            memory_limit, force, retry_failed, t_start)
 
 
-def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, retries, memory_limit,
-                force, retry_failed, t_start) -> RunSummary:
-    """The body of :func:`run`, with the store's lock held."""
-    clean_partial(out)
-    summary = RunSummary(out=out)
-    silence = logging.ERROR if not progress else logging.WARNING
+def _size_hint(shape: Shape) -> int:
+    """Bytes of the input (file size, or the arrays' size): the order and batching key."""
+    if shape.path is not None:
+        try:
+            return os.path.getsize(shape.path)
+        except OSError:
+            return 0
+    return sum(np.asarray(x).nbytes for x in (shape.V, shape.C) if x is not None)
 
-    # 1. skip current results (hashes computed here: the inputs must be readable by the client)
+
+def _pending(shapes, out, key, base, force, retry_failed, summary) -> list:
+    """``[(shape, meta)]`` of the shapes without a current result; skipped and earlier input
+    failures go to ``summary``.
+
+    A file is hashed here only when its record is for the same job but its size or
+    modification time changed since (else the recorded hash stands, or the worker hashes
+    it while reading): the client reads no input on a first run, and one stat per file on
+    a rerun.
+    """
     pending = []
     for s in shapes:
-        h = input_hash(s)
-        meta = {"job": job.kind, "params": job.params, "laplacian": options, "job_key": key,
-                "input_hash": h}
-        prev = read_record(out, s.name)
-        current = (not force and prev is not None and prev.get("input_hash") == h
-                   and prev.get("job_key") == key)
-        problem = None
+        meta = dict(base)
+        prev = None if force else read_record(out, s.name)
+        if prev is not None and prev.get("job_key") == key:
+            if s.path is not None and prev.get("input_stat") == file_stat(s.path):
+                h = prev.get("input_hash")
+            else:
+                h = input_hash(s)
+            current = prev.get("input_hash") == h
+        else:
+            current = False
         if (current and prev["status"] == "done") or (prev is None and (Path(out) / s.name).is_dir()):
             problem = check_record(out, s.name)[2]
             if problem is not None:
@@ -464,90 +591,156 @@ def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, re
             summary.failed[s.name] = prev.get("error", "failed") + " (recorded earlier; not retried)"
         else:
             pending.append((s, meta))
+    return pending
+
+
+def _batches(pending, slots: int) -> list:
+    """Group ``pending`` (largest input first) into tasks: large shapes alone, small ones
+    together, at most :data:`BATCH_SHAPES` shapes and :data:`BATCH_BYTES` input bytes per
+    task and at least four tasks per worker slot, so that the load still balances."""
+    items = sorted(((_size_hint(s), s, m) for s, m in pending), key=lambda x: -x[0])
+    per_task = max(1, min(BATCH_SHAPES, len(items) // (4 * max(slots, 1))))
+    tasks, current, size = [], [], 0
+    for nbytes, s, m in items:
+        if nbytes > SMALL_BYTES:
+            tasks.append([(s, m)])
+            continue
+        if current and (len(current) >= per_task or size + nbytes > BATCH_BYTES):
+            tasks.append(current)
+            current, size = [], 0
+        current.append((s, m))
+        size += nbytes
+    if current:
+        tasks.append(current)
+    return tasks
+
+
+class _Progress:
+    """A one-line progress bar on stdout: shapes finished of all, rate, failures, time left."""
+
+    def __init__(self, total: int, show: bool, every: float = 0.5):
+        self.total, self.show, self.every = total, show, every
+        self.done = self.failed = 0
+        self.t0 = self.last = time.perf_counter()
+
+    def update(self, done: int = 0, failed: int = 0, force: bool = False):
+        self.done += done
+        self.failed += failed
+        now = time.perf_counter()
+        if not self.show or (not force and now - self.last < self.every):
+            return
+        self.last = now
+        n = self.done + self.failed
+        rate = n / max(now - self.t0, 1e-9)
+        left = (self.total - n) / rate if rate > 0 else float("inf")
+        width = 30
+        fill = int(width * n / max(self.total, 1))
+        eta = f"{left:.0f} s left" if math.isfinite(left) else ""
+        sys.stdout.write(f"\r[{'#' * fill}{' ' * (width - fill)}] {n}/{self.total} shapes, "
+                         f"{rate:.1f}/s, {self.failed} failed {eta}   ")
+        sys.stdout.flush()
+
+    def close(self):
+        if self.show:
+            self.update(force=True)
+            sys.stdout.write("\n")
+            sys.stdout.flush()
+
+
+def _record_lost(out, s, meta, err, summary):
+    """A task that never returned (workers died, store unwritable): recorded as a transient failure."""
+    summary.failed[s.name] = err
+    try:
+        write_record(out, s.name, dict(meta, name=s.name, source=s.source, status="failed", error=err,
+                                       transient=True, version=__version__))
+    except OSError:
+        pass
+
+
+def _dispatch(client, tasks, job, out, limit, retries, slots, summary, bar, too_large):
+    """Run ``tasks`` with at most ``2 * slots + 2`` in flight, as results arrive.
+
+    A task that failed (its worker died ``allowed-failures`` times, or the store could not
+    be written) is split into single shapes and resubmitted once; a single shape that
+    fails is recorded as failed.
+    """
+    from distributed import as_completed
+
+    queue = list(reversed(tasks))       # pop() takes the largest first
+    window = 2 * max(slots, 1) + 2
+    running = {}
+    ac = as_completed()
+
+    def submit():
+        while queue and len(running) < window:
+            task = queue.pop()
+            first = task[0][0].name
+            f = client.submit(process_batch, [s for s, _ in task], job, out, [m for _, m in task],
+                              limit, pure=False, retries=retries,
+                              key=f"shapes-{first}-{len(task)}-{uuid.uuid4().hex[:8]}")
+            running[f.key] = task
+            ac.add(f)
+
+    submit()
+    for f in ac:
+        task = running.pop(f.key)
+        if f.status == "finished":
+            meta = {s.name: (s, m) for s, m in task}
+            for r in f.result():
+                if r["status"] == "done":
+                    summary.done.append(r["name"])
+                    bar.update(done=1)
+                elif r["status"] == "too_large":
+                    too_large.append(meta[r["name"]] + (r["estimate"],))
+                else:
+                    summary.failed[r["name"]] = r["error"]
+                    bar.update(failed=1)
+        elif len(task) > 1:       # find the shape that kills its workers: one per task
+            queue.extend([x] for x in task)
+        else:
+            exc = f.exception()
+            _record_lost(out, task[0][0], task[0][1], f"{type(exc).__name__}: {exc}", summary)
+            bar.update(failed=1)
+        f.release()
+        submit()
+
+
+def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, retries, memory_limit,
+                force, retry_failed, t_start) -> RunSummary:
+    """The body of :func:`run`, with the store's lock held."""
+    clean_partial(out)
+    summary = RunSummary(out=out)
+    silence = logging.ERROR if not progress else logging.WARNING
+    base = {"job": job.kind, "params": job.params, "laplacian": options, "job_key": key,
+            "run_id": uuid.uuid4().hex}
+    pending = _pending(shapes, out, key, base, force, retry_failed, summary)
     if not pending:
         summary.seconds = time.perf_counter() - t_start
         return summary
 
     require("distributed", "cluster", "spectral_igl.collection")
-    from distributed import progress as dask_progress
-    from distributed import wait
-
     client, cluster, owned = _connect(scheduler, workers, memory_limit, silence)
+    bar = _Progress(len(pending), progress)
     try:
-        summary.workers, limit, nthreads, mem_res = _worker_limits(client)
-        # 2. size every remaining input (files on the workers, arrays here); record unreadable ones
-        files = [s for s, _ in pending if s.path is not None]
-        futs = client.map(inspect_shape, files, pure=False, retries=retries,
-                          key=[f"inspect-{s.name}-{os.urandom(4).hex()}" for s in files])
-        infos = {s.name: i for s, i in zip(files, client.gather(futs))}
-        todo = []
-        for s, meta in pending:
-            info = infos[s.name] if s.path is not None else inspect_shape(s)
-            if "error" in info:
-                write_record(out, s.name, dict(meta, name=s.name, source=s.source, status="failed",
-                                               error=info["error"], transient=info["transient"],
-                                               version=__version__))
-                summary.failed[s.name] = info["error"]
-                continue
-            est = estimate_memory(info["n"], info["nnz"], info["domain"], job)
-            meta["memory_estimate_bytes"] = est
-            todo.append((est, s, meta))
-        todo.sort(key=lambda x: -x[0])
-        small = [x for x in todo if limit is None or x[0] <= limit]
-        large = [x for x in todo if not (limit is None or x[0] <= limit)]
-
-        # 3. shapes that fit a worker: in parallel, largest first
-        def submit(items, c):
-            futures = []
-            for est, s, meta in items:
-                kw = {}
-                if mem_res is not None and nthreads > 1:   # pack by estimated memory
-                    kw["resources"] = {"MEMORY": min(est, mem_res)}
-                futures.append(c.submit(process_shape, s, job, out, meta, pure=False,
-                                        retries=retries, priority=int(est // 2 ** 20),
-                                        key=f"shape-{s.name}-{os.urandom(4).hex()}", **kw))
-            return futures
-
-        def collect(items, futures, show):
-            if show and futures:
-                dask_progress(futures)
-            wait(futures)
-            for (est, s, meta), f in zip(items, futures):
-                if f.status == "finished":
-                    r = f.result()
-                    if r["status"] == "done":
-                        summary.done.append(s.name)
-                    else:
-                        summary.failed[s.name] = r["error"]
-                else:   # the worker died more often than allowed, or the store was not writable
-                    exc = f.exception()
-                    err = f"{type(exc).__name__}: {exc}"
-                    summary.failed[s.name] = err
-                    try:
-                        write_record(out, s.name, dict(meta, name=s.name, source=s.source,
-                                                       status="failed", error=err, transient=True,
-                                                       version=__version__))
-                    except OSError:
-                        pass
-
-        collect(small, submit(small, client), progress)
-
-        # 4. shapes larger than a worker's limit: one at a time
-        if large:
+        summary.workers, limit, nthreads = _worker_limits(client)
+        slots = max(summary.workers * nthreads, 1)
+        too_large = []
+        _dispatch(client, _batches(pending, slots), job, out, limit, retries, slots, summary, bar,
+                  too_large)
+        # shapes larger than a worker's limit: one at a time, largest first
+        if too_large:
             if owned and cluster is not None:
-                from distributed import Client, LocalCluster
+                from distributed import Client
 
                 client.close()
                 cluster.close()
-                total = limit * summary.workers
-                cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                       memory_limit=total, dashboard_address=None,
-                                       silence_logs=silence)
+                cluster = _local_cluster(1, limit * summary.workers, silence)
                 client = Client(cluster)
-            for item in large:
-                item[2]["run_alone"] = True
-                collect([item], submit([item], client), progress)
+            for s, meta, est in sorted(too_large, key=lambda x: -x[2]):
+                meta["run_alone"] = True
+                _dispatch(client, [[(s, meta)]], job, out, None, retries, 1, summary, bar, [])
     finally:
+        bar.close()
         if owned:
             client.close()
             if cluster is not None:
