@@ -280,7 +280,7 @@ def shape_distance(a, b, signature: str = "heat_trace", return_info: bool = Fals
 
 
 def shape_distance_matrix(signatures, signature: str = "heat_trace", abs_error=None,
-                          return_info: bool = False):
+                          return_info: bool = False, components=None):
     r"""The (m, m) matrix of :func:`shape_distance` between ``m`` precomputed signatures.
 
     .. math:: D_{ij} = \lVert f(s_i) - f(s_j) \rVert_2
@@ -303,6 +303,15 @@ def shape_distance_matrix(signatures, signature: str = "heat_trace", abs_error=N
         Also return ``info``: ``abs_error`` (m, m), a bound of :math:`|D_{ij} - \tilde D_{ij}|`
         (inf without ``abs_error``), ``bound_kind`` (``"proof"`` when ``abs_error`` is
         given: the caller vouches for its kind; None without), ``method``.
+    components : (m,) int, optional
+        Heat traces only: each shape's number of connected components :math:`\beta_0`
+        (``lap.n_components``; ``n_components`` in a collection's records). The zero
+        eigenvalues add :math:`\beta_0` to :math:`Z(t)` at every time, which hides the
+        decaying rest at middle and large times; with ``components`` the features are
+        :math:`\log(Z(t) - \beta_0)` and :math:`\log\beta_0`, so that at large times each
+        trace shows its first nonzero eigenvalue (:math:`\log(Z - \beta_0) \approx
+        \log m_1 - t\lambda_1`). Every :math:`Z(t) - \beta_0` must be positive: use times
+        at which the first nonzero eigenvalues have not decayed below the bounds.
 
     Returns
     -------
@@ -329,8 +338,9 @@ def shape_distance_matrix(signatures, signature: str = "heat_trace", abs_error=N
     """
     signature = _check_signature(signature)
     S = _signature_array(signatures, "signatures")
+    S, extra = _without_zero_modes(S, signature, components)
     X = np.stack([_features(s, signature) for s in S])
-    D = cdist(X, X)
+    D = cdist(np.c_[X, extra], np.c_[X, extra])
     if not as_flag(return_info, "return_info"):
         return D
     if abs_error is None:
@@ -339,11 +349,32 @@ def shape_distance_matrix(signatures, signature: str = "heat_trace", abs_error=N
     if E.shape != S.shape or np.any(E < 0):
         raise ValueError(f"abs_error must be a non-negative array of the signatures' shape {S.shape}, "
                          f"got {describe(abs_error)}")
+    if components is not None:   # the rounding of Z - beta_0, and of log(beta_0)
+        E = E + EPS * np.abs(S)
     norms = np.array([np.linalg.norm(_feature_error(s, e, signature)) for s, e in zip(S, E)])
-    g = _gamma(2 * X.shape[1] + 4)
+    norms = norms + 4 * EPS * np.abs(extra).sum(axis=1)
+    g = _gamma(2 * X.shape[1] + 6)
     bound = (norms[:, None] + norms[None, :]) * (1 + g) + g * D
     np.fill_diagonal(bound, 0.0)      # a signature against itself: exactly zero
     return D, bound_info(bound, "proof", signature)
+
+
+def _without_zero_modes(S, signature, components):
+    """``(S - beta_0, log(beta_0) / sqrt(T))`` for heat traces with ``components``; else ``(S, [])``."""
+    if components is None:
+        return S, np.zeros((S.shape[0], 0))
+    if signature != "heat_trace":
+        raise ValueError(f"components applies to heat traces, not to signature={signature!r}")
+    b = as_array(components, "components")
+    if b.shape != (S.shape[0],) or b.dtype.kind not in "iu" or np.any(b < 1):
+        raise ValueError(f"components must be ({S.shape[0]},) integers >= 1, one per signature, got "
+                         f"{describe(components)}")
+    R = S - b[:, None]
+    if np.any(R <= 0):
+        i, j = np.argwhere(R <= 0)[0]
+        raise ValueError(f"the heat trace of signature {i} at entry {j} is not above its {b[i]} "
+                         "component(s): at that time only the zero eigenvalues remain; use smaller times")
+    return R, np.log(b.astype(float))[:, None] / np.sqrt(S.shape[1])
 
 
 def _signature_array(x, name):
