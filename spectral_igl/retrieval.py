@@ -38,6 +38,8 @@ def _job_of(results, job):
             raise TypeError(f"job must be a Job (Job.heat_trace(...) or Job.shape_dna(k)) or None, got "
                             f"{describe(job)}")
         kind, params = job.kind, json.loads(json.dumps(job.params))
+    elif not results:
+        raise ValueError("the store holds no completed result to compare")
     else:
         found = {json.dumps([r.meta.get("job"), r.meta.get("params")], sort_keys=True) for r in results.values()}
         if len(found) != 1:
