@@ -26,6 +26,7 @@ from .applications import (
                            heat_trace,
                            mean_curvature_flow,
                            optimal_time,
+                           retrieval_scores,
                            schrodinger,
                            shape_distance,
                            shape_distance_matrix,
@@ -110,10 +111,11 @@ __all__ = [
     "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger", "mean_curvature_flow", "shape_dna", "heat_trace", "shape_distance",
-    "shape_distance_matrix",
+    "shape_distance_matrix", "retrieval_scores",
 ]
 
 # --- collection ---
 from . import collection  # noqa: E402  (dask and zarr are imported only when it runs)
+from .retrieval import collection_distance_matrix  # noqa: E402
 
-__all__ += ["collection"]
+__all__ += ["collection", "collection_distance_matrix"]

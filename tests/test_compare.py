@@ -152,3 +152,40 @@ def test_bad_input_is_refused_with_a_message(blob):
         sig.shape_distance_matrix([[1.0, -2.0], [1.0, 2.0]])
     with pytest.raises(ValueError, match="normalize"):
         Job.shape_dna(5, normalize="metres")
+
+
+def test_heat_trace_distance_without_the_zero_modes(blob):
+    """With the number of components, the features are log(Z - beta_0) and log(beta_0): checked
+    against traces summed from every dense eigenvalue but the zero ones."""
+    V, F = blob
+    W, G = icosphere(1)
+    shapes = [(V, F), (np.r_[V, W + 3.0], np.r_[F, G + len(V)]), (1.5 * V, F)]   # 1, 2, 1 components
+    tau = np.array([1e-2, 3e-2, 0.1])
+    laps = [sig.laplacian(*s) for s in shapes]
+    Z, E, exact, top = [], [], [], []
+    for lap in laps:
+        z, info = sig.heat_trace(lap, tau, return_info=True)
+        Z.append(z)
+        E.append(info["abs_error"])
+        lam = np.sort(sla.eigh(lap.L.toarray(), lap.B.toarray(), eigvals_only=True))
+        top.append(lam[-1])
+        rest = lam[lap.n_components:]
+        exact.append(np.exp(-np.outer(tau * lap.B.sum(), rest)).sum(axis=1))
+    b = np.array([lap.n_components for lap in laps])
+    assert list(b) == [1, 2, 1]
+    D, info = sig.shape_distance_matrix(Z, abs_error=E, return_info=True, components=b)
+    X = np.c_[np.log(np.array(exact)), np.log(b)] / np.sqrt(tau.size)
+    truth = np.linalg.norm(X[:, None] - X[None], axis=2)
+    # the dense truth is itself off by delta = 16 n u lambda_max per eigenvalue, so each of its
+    # terms e^{-t lambda} by t delta relative, and log(Z - beta_0) by t delta
+    slack = np.array([tau[-1] * lap.B.sum() * 16 * lap.n * U * lam_max for lap, lam_max in zip(laps, top)])
+    allowance = slack[:, None] + slack[None, :]
+    assert np.all(np.abs(D - truth) <= info["abs_error"] + allowance)
+    assert D[0, 2] <= info["abs_error"][0, 2] and D[0, 1] > 1e3 * info["abs_error"][0, 1]
+    assert info["bound_kind"] == "proof"
+    with pytest.raises(ValueError, match="only the zero eigenvalues remain"):
+        sig.shape_distance_matrix(Z, components=[1, 3, 1])
+    with pytest.raises(ValueError, match="components must be"):
+        sig.shape_distance_matrix(Z, components=[1, 2])
+    with pytest.raises(ValueError, match="components applies to heat traces"):
+        sig.shape_distance_matrix(Z, "shape_dna", components=b)

@@ -96,3 +96,28 @@ def test_command_line(tmp_path):
     assert F.shape[1] == 3 and len(V) > 100
     assert np.load(tmp_path / "p.npy").shape == (500, 3)
     assert np.load(tmp_path / "v.npy").shape == (5, 5, 5)
+
+
+def test_bend_is_rigid_outside_its_band_and_bends_inside():
+    from data_generators import bend
+
+    V, F = cylinder(0.1, 2.0, 16, 40)           # along z, from 0 to 2
+    assert np.allclose(bend(V, 0.0), V, rtol=0, atol=1e-15)
+    W = bend(V, np.pi / 4, at=0.6, band=0.3)    # joint at z = 1.2, blend over z in [0.9, 1.5]
+    below, above = V[:, 2] <= 0.9 - 1e-9, V[:, 2] >= 1.5 + 1e-9
+    assert np.allclose(W[below], V[below], atol=1e-12)
+    # the part beyond the band turned rigidly by 45 degrees: distances kept, direction turned
+    P, Q = V[above], W[above]
+    assert np.allclose(np.linalg.norm(P[:, None] - P[None], axis=2),
+                       np.linalg.norm(Q[:, None] - Q[None], axis=2), atol=1e-12)
+    # a segment along the cylinder's axis (perpendicular to the turning axis) turns by 45 degrees
+    i = np.argmax(V[:, 2])
+    j = np.flatnonzero(above & np.all(np.isclose(V[:, :2], V[i, :2]), axis=1))
+    j = j[np.argmin(V[j, 2])]
+    a, b = V[i] - V[j], W[i] - W[j]
+    assert np.isclose(a @ b / (a @ a), np.cos(np.pi / 4), rtol=1e-12)
+    # inside the band the surface stretches, on the outside of the bend, by theta w' r at most
+    E = np.r_[F[:, :2], F[:, 1:], F[:, ::2]]
+    l0, l1 = (np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1) for X in (V, W))
+    strain = np.abs(l1 - l0) / l0
+    assert 0.01 < strain.max() <= np.pi / 4 * 1.5 / 0.6 * 0.1 * 1.1

@@ -41,7 +41,8 @@ EXAMPLES = _examples()
 #: modules whose examples call an extra without importing it
 EXTRA_OF_MODULE = {"spectral_igl.laplacian.tetrahedralize": ("pytetwild",),
                    "spectral_igl.viz": ("pyvista", "matplotlib"),
-                   "spectral_igl.collection": ("zarr", "distributed")}
+                   "spectral_igl.collection": ("zarr", "distributed"),
+                   "spectral_igl.retrieval": ("zarr", "distributed")}
 
 
 def _missing_extras(test) -> list[str]:

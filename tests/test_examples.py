@@ -19,7 +19,7 @@ SCRIPTS = [
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
     "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
-    "fig26_truncated_smoothing", "fig_mcf",
+    "fig26_truncated_smoothing", "fig_mcf", "fig_retrieval",
 ]
 
 
@@ -210,3 +210,12 @@ def test_fig_mcf(tmp_path):
     assert np.all(np.diff(r["roundness"]) < 0) and r["roundness"][-1] < 0.5 * r["roundness"][0]
     assert r["area_change"] < 1e-12
     assert r["min_area_ratio_conformal"] > 1e-3
+
+
+def test_fig_retrieval(tmp_path):
+    r = run("fig_retrieval", tmp_path)
+    assert r["shapes"] == 16 and r["classes"] == 4 and r["done"] == 16
+    # the stored matrix is the one of ShapeDNA computed here, and a rerun recomputes nothing
+    assert r["difference_to_direct"] == 0.0 and r["bound_kind"] == "proof" and r["largest_bound"] < 1e-8
+    assert r["rerun_skipped"] == 16 and not r["matrix_recomputed_on_rerun"] and r["rerun_equal"]
+    assert r["nn_accuracy"] == 1.0 and r["map"] == 1.0

@@ -30,7 +30,7 @@ STAGES = {
     "distances": 8, "descriptors": 8, "embedding": 8,
     "applications": 9,
     "quantity": 10,
-    "collection": 11,
+    "collection": 11, "retrieval": 11,
     "viz": 12,
     "cli": 13,
 }

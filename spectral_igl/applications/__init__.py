@@ -2,7 +2,7 @@
 time-scale selection, geodesic and transport distances, basis functions, waves,
 mean-curvature flow, shape comparison."""
 from .basis import diffusion_basis, feature_points, graph_extrema
-from .compare import heat_trace, shape_distance, shape_distance_matrix, shape_dna
+from .compare import heat_trace, retrieval_scores, shape_distance, shape_distance_matrix, shape_dna
 from .critical_points import CriticalPoints, critical_points
 from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
 from .harmonic import harmonic
@@ -19,5 +19,5 @@ __all__ = [
     "sinkhorn", "wasserstein_distance", "wasserstein_barycenter",
     "diffusion_basis", "feature_points", "graph_extrema",
     "schrodinger", "mean_curvature_flow",
-    "shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix",
+    "shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix", "retrieval_scores",
 ]

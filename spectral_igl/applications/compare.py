@@ -26,8 +26,8 @@ from ..laplacian import as_laplacian
 from ..laplacian.units import TIME_UNITS, time_scale
 from ..linalg import eigs
 
-__all__ = ["shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix", "TRACE_TIMES",
-           "SIGNATURES"]
+__all__ = ["shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix", "retrieval_scores",
+           "TRACE_TIMES", "SIGNATURES"]
 
 #: the default heat-trace grid, in the shape's units (x area on a surface): from where a
 #: few thousand vertices still resolve the kernel to where only the first eigenvalues remain
@@ -279,8 +279,14 @@ def shape_distance(a, b, signature: str = "heat_trace", return_info: bool = Fals
     return d, bound_info(bound, weakest(sa[2], sb[2]), signature)
 
 
-def shape_distance_matrix(signatures, signature: str = "heat_trace"):
-    """The (m, m) matrix of :func:`shape_distance` between ``m`` precomputed signatures.
+def shape_distance_matrix(signatures, signature: str = "heat_trace", abs_error=None,
+                          return_info: bool = False, components=None):
+    r"""The (m, m) matrix of :func:`shape_distance` between ``m`` precomputed signatures.
+
+    .. math:: D_{ij} = \lVert f(s_i) - f(s_j) \rVert_2
+
+    with :math:`f` the features :func:`shape_distance` compares (:math:`\log Z(t)/\sqrt T`
+    for the heat trace, :math:`s\lambda_l / l` for ShapeDNA).
 
     Parameters
     ----------
@@ -290,11 +296,34 @@ def shape_distance_matrix(signatures, signature: str = "heat_trace"):
         loaded from a store) or :func:`shape_dna` values with the same ``k``.
     signature : str
         ``"heat_trace"`` (default) or ``"shape_dna"``: how to compare them.
+    abs_error : (m, T) float, optional
+        The bound of every signature entry (``info["abs_error"]`` of :func:`heat_trace` or
+        :func:`shape_dna`, the stored ``<key>_abs_error``); needed for a bound of ``D``.
+    return_info : bool
+        Also return ``info``: ``abs_error`` (m, m), a bound of :math:`|D_{ij} - \tilde D_{ij}|`
+        (inf without ``abs_error``), ``bound_kind`` (``"proof"`` when ``abs_error`` is
+        given: the caller vouches for its kind; None without), ``method``.
+    components : (m,) int, optional
+        Heat traces only: each shape's number of connected components :math:`\beta_0`
+        (``lap.n_components``; ``n_components`` in a collection's records). The zero
+        eigenvalues add :math:`\beta_0` to :math:`Z(t)` at every time, which hides the
+        decaying rest at middle and large times; with ``components`` the features are
+        :math:`\log(Z(t) - \beta_0)` and :math:`\log\beta_0`, so that at large times each
+        trace shows its first nonzero eigenvalue (:math:`\log(Z - \beta_0) \approx
+        \log m_1 - t\lambda_1`). Every :math:`Z(t) - \beta_0` must be positive: use times
+        at which the first nonzero eigenvalues have not decayed below the bounds.
 
     Returns
     -------
-    (m, m) float, symmetric, zero on the diagonal (Euclidean distances of the features
-    that :func:`shape_distance` compares)
+    (m, m) float, symmetric, zero on the diagonal
+    info : dict, only with ``return_info``
+
+    Notes
+    -----
+    With :math:`e_i` a bound of the error of the features of shape i (from the bound of
+    each signature entry, as :func:`shape_distance` does), the triangle inequality gives
+    :math:`|D_{ij} - \tilde D_{ij}| \le \lVert e_i\rVert + \lVert e_j\rVert`, plus the
+    rounding of the norms.
 
     Examples
     --------
@@ -302,12 +331,115 @@ def shape_distance_matrix(signatures, signature: str = "heat_trace"):
     >>> D = shape_distance_matrix([[3.0, 2.0, 1.0], [3.0, 2.0, 1.0], [4.0, 2.0, 1.0]])
     >>> D.shape, bool(D[0, 1] == 0 and D[0, 2] == D[2, 0] > 0)
     ((3, 3), True)
+    >>> D, info = shape_distance_matrix([[3.0, 2.0], [4.0, 2.0]], abs_error=[[1e-9, 1e-9]] * 2,
+    ...                                 return_info=True)
+    >>> bool(info["abs_error"].max() < 1e-9), info["bound_kind"]
+    (True, 'proof')
     """
     signature = _check_signature(signature)
-    S = as_array(signatures, "signatures")
+    S = _signature_array(signatures, "signatures")
+    S, extra = _without_zero_modes(S, signature, components)
+    X = np.stack([_features(s, signature) for s in S])
+    D = cdist(np.c_[X, extra], np.c_[X, extra])
+    if not as_flag(return_info, "return_info"):
+        return D
+    if abs_error is None:
+        return D, bound_info(np.full(D.shape, np.inf), None, signature)
+    E = _signature_array(abs_error, "abs_error")
+    if E.shape != S.shape or np.any(E < 0):
+        raise ValueError(f"abs_error must be a non-negative array of the signatures' shape {S.shape}, "
+                         f"got {describe(abs_error)}")
+    if components is not None:   # the rounding of Z - beta_0, and of log(beta_0)
+        E = E + EPS * np.abs(S)
+    norms = np.array([np.linalg.norm(_feature_error(s, e, signature)) for s, e in zip(S, E)])
+    norms = norms + 4 * EPS * np.abs(extra).sum(axis=1)
+    g = _gamma(2 * X.shape[1] + 6)
+    bound = (norms[:, None] + norms[None, :]) * (1 + g) + g * D
+    np.fill_diagonal(bound, 0.0)      # a signature against itself: exactly zero
+    return D, bound_info(bound, "proof", signature)
+
+
+def _without_zero_modes(S, signature, components):
+    """``(S - beta_0, log(beta_0) / sqrt(T))`` for heat traces with ``components``; else ``(S, [])``."""
+    if components is None:
+        return S, np.zeros((S.shape[0], 0))
+    if signature != "heat_trace":
+        raise ValueError(f"components applies to heat traces, not to signature={signature!r}")
+    b = as_array(components, "components")
+    if b.shape != (S.shape[0],) or b.dtype.kind not in "iu" or np.any(b < 1):
+        raise ValueError(f"components must be ({S.shape[0]},) integers >= 1, one per signature, got "
+                         f"{describe(components)}")
+    R = S - b[:, None]
+    if np.any(R <= 0):
+        i, j = np.argwhere(R <= 0)[0]
+        raise ValueError(f"the heat trace of signature {i} at entry {j} is not above its {b[i]} "
+                         "component(s): at that time only the zero eigenvalues remain; use smaller times")
+    return R, np.log(b.astype(float))[:, None] / np.sqrt(S.shape[1])
+
+
+def _signature_array(x, name):
+    """``x`` as an (m, T) float array of finite numbers, T >= 2."""
+    S = as_array(x, name)
     if S.dtype.kind not in "iuf" or S.ndim != 2 or S.shape[0] < 1 or S.shape[1] < 2:
-        raise ValueError(f"signatures must be an (m, T) array of numbers with T >= 2, got {describe(signatures)}")
+        raise ValueError(f"{name} must be an (m, T) array of numbers with T >= 2, got {describe(x)}")
     if not np.all(np.isfinite(S)):
-        raise ValueError("signatures must be finite")
-    X = np.stack([_features(s, signature) for s in S.astype(float)])
-    return cdist(X, X)
+        raise ValueError(f"{name} must be finite")
+    return S.astype(float)
+
+
+def retrieval_scores(D, labels):
+    r"""Leave-one-out retrieval scores of a distance matrix over labelled shapes.
+
+    Each shape is a query against all the others, ranked by increasing distance (ties kept
+    in index order); the relevant shapes are those with its label.
+
+    .. math:: \text{NN} = \frac1m \sum_q [\ell(r_q(1)) = \ell(q)],\qquad
+              \text{mAP} = \frac1m \sum_q \frac{1}{|R_q|}\sum_{j:\,\ell(r_q(j)) = \ell(q)}
+              \frac{|\{i \le j: \ell(r_q(i)) = \ell(q)\}|}{j}
+
+    with :math:`r_q(j)` the j-th nearest other shape and :math:`R_q` the relevant ones.
+
+    Parameters
+    ----------
+    D : (m, m) float
+        Distances, for instance from :func:`shape_distance_matrix`.
+    labels : sequence of m hashables
+        The class of each shape; every class needs at least two members (a query without a
+        relevant shape has no average precision).
+
+    Returns
+    -------
+    nn_accuracy : float
+        The fraction of queries whose nearest other shape has their class.
+    mean_average_precision : float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> D = np.array([[0, 1, 5, 6], [1, 0, 5, 6], [5, 5, 0, 2], [6, 6, 2, 0]], float)
+    >>> retrieval_scores(D, ["a", "a", "b", "b"])
+    (1.0, 1.0)
+    >>> nn, mAP = retrieval_scores(D, ["a", "b", "a", "b"])   # APs 1/2, 1/3, 1/2, 1/3
+    >>> nn, round(mAP, 12) == round(5 / 12, 12)
+    (0.0, True)
+    """
+    D = as_array(D, "D")
+    labels = np.asarray(labels)
+    m = labels.shape[0] if labels.ndim == 1 else -1
+    if D.dtype.kind not in "iuf" or D.ndim != 2 or D.shape != (m, m) or m < 2:
+        raise ValueError(f"D must be an (m, m) array of numbers for m = len(labels) >= 2 labels, got "
+                         f"{describe(D)} and {m if m >= 0 else 'labels of shape ' + str(labels.shape)}")
+    if not np.all(np.isfinite(D)):
+        raise ValueError("D must be finite")
+    values, counts = np.unique(labels, return_counts=True)
+    if counts.min() < 2:
+        raise ValueError(f"labels: every class needs at least two shapes, {values[counts.argmin()]!r} "
+                         "has one")
+    nn, aps = [], []
+    for q in range(m):
+        order = np.argsort(D[q], kind="stable")
+        order = order[order != q]
+        rel = labels[order] == labels[q]
+        nn.append(rel[0])
+        aps.append(np.mean(np.cumsum(rel)[rel] / (np.flatnonzero(rel) + 1)))
+    return float(np.mean(nn)), float(np.mean(aps))
