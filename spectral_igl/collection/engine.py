@@ -55,7 +55,39 @@ class Shape:
 
 @dataclass
 class RunSummary:
-    """What a :func:`run` did: names of the shapes done, skipped and failed."""
+    """What a :func:`run` did: names of the shapes done, skipped and failed.
+
+    Parameters
+    ----------
+    out : str
+        The store written.
+    done, skipped : list of str
+        Shapes computed by this run; shapes whose stored result was current (same input
+        hash, job key and package version) and left as it was.
+    failed : dict of str -> str
+        Shapes that raised, with the error text (the run goes on without them).
+    damaged : dict of str -> str
+        Stored results found damaged (a checksum or a file that no longer matches) and
+        recomputed, with what was wrong.
+    seconds : float
+        Wall time of the run.
+    workers : int
+        dask workers used.
+
+    Attributes
+    ----------
+    ok : bool
+        No shape failed.
+
+    Examples
+    --------
+    >>> from spectral_igl.collection import RunSummary
+    >>> s = RunSummary("hks.zarr", done=["cow"], skipped=["spot"], seconds=1.25, workers=2)
+    >>> s.ok
+    True
+    >>> print(s)
+    1 done, 1 skipped, 0 failed in 1.2 s on 2 worker(s); store hks.zarr
+    """
 
     out: str
     done: list = field(default_factory=list)
@@ -121,7 +153,17 @@ def collect_inputs(inputs) -> list:
 
     Returns
     -------
-    list of Shape, with unique names (a file's name is its stem).
+    list of Shape
+        With unique names (a file's name is its stem); files are named, not read.
+
+    Examples
+    --------
+    >>> from spectral_igl.collection import collect_inputs
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(1)
+    >>> shapes = collect_inputs({"ball": (V, F), "cloud": V})
+    >>> [(s.name, s.C is None) for s in shapes]
+    [('ball', False), ('cloud', True)]
     """
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -214,6 +256,33 @@ def estimate_memory(n: int, nnz: int, domain: str = "triangle", job: Job | None 
     :math:`O(n\log n)`), :math:`f = n^{1/3}`, c = 200 for tetrahedra (fill
     :math:`O(n^{4/3})`); eigenvalue jobs and truncated WKS need one real factor and the
     Lanczos basis, :math:`20\operatorname{nnz}\log_2 n + 32 n k`.
+
+    Parameters
+    ----------
+    n : int
+        Vertices (points) of the shape.
+    nnz : int
+        Stored entries of its Laplacian L.
+    domain : str
+        ``"tet"`` for tetrahedral meshes (wider fill), anything else for surfaces, polygon
+        meshes and point sets.
+    job : Job or None
+        The job to run; eigenvalue jobs and truncated WKS use the smaller model.
+
+    Returns
+    -------
+    int
+        Estimated peak bytes; :func:`run` runs a shape alone (not beside others on its
+        worker) when the estimate exceeds the worker's share of memory.
+
+    Examples
+    --------
+    >>> from spectral_igl.collection import estimate_memory
+    >>> mib = estimate_memory(10_000, 70_000) / 2**20
+    >>> 64 < mib < 64 + 130 * 70_000 * 14 / 2**20
+    True
+    >>> estimate_memory(10_000, 70_000, domain="tet") > estimate_memory(10_000, 70_000)
+    True
     """
     n, nnz = max(int(n), 2), max(int(nnz), 1)
     if job is not None and not job.uses_selected_inverse() and job.kind != "function":
@@ -531,6 +600,23 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     store raises ``StoreInUse`` naming the holder before any work; the lock of a run
     that was killed is detected (its process is gone) and taken over. A run then removes
     leftovers of interrupted writes.
+
+    Examples
+    --------
+    Certified eigenvalues of two generated shapes on one local worker; a second run finds
+    them current and computes nothing:
+
+    >>> from spectral_igl.collection import Job, load, run
+    >>> from spectral_igl.data_generators import icosphere, torus
+    >>> shapes = {"ball": icosphere(2), "torus": torus(n_major=20, n_minor=10)}
+    >>> summary = run(shapes, Job.eigenvalues(4), "ev.zarr", workers=1, progress=False)
+    >>> sorted(summary.done), summary.ok
+    (['ball', 'torus'], True)
+    >>> run(shapes, Job.eigenvalues(4), "ev.zarr", workers=1, progress=False).skipped
+    ['ball', 'torus']
+    >>> results, failures = load("ev.zarr")
+    >>> results["ball"].bound_kind, failures
+    ('proof', [])
     """
     t_start = time.perf_counter()
     shapes = collect_inputs(inputs)

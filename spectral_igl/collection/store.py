@@ -519,6 +519,25 @@ class ShapeResult:
     one), ``bound_kind``, ``method``, ``of`` (the bounded array) and, where the job gives
     one, a ``note``; the per-entry bound is the array ``<of>_abs_error``. Read them with
     :meth:`abs_error` and :attr:`bound_kind`.
+
+    Parameters
+    ----------
+    name : str
+        The shape's name in the store.
+    arrays : dict of str -> ndarray
+        Its stored arrays (empty when loaded with ``arrays=False``).
+    meta : dict
+        Its metadata: ``input_hash``, ``mesh_hash``, ``version``, ``job``, ``params``,
+        ``timings``, ``bounds``...
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from spectral_igl.collection import ShapeResult
+    >>> r = ShapeResult("cow", {"hks": np.ones((3, 2))},
+    ...                 {"bounds": {"abs_error": 1e-9, "bound_kind": "proof", "of": "hks"}})
+    >>> r.bound_kind, float(r.abs_error("hks").max())
+    ('proof', 1e-09)
     """
 
     name: str
@@ -547,7 +566,31 @@ class ShapeResult:
 
 
 class Loaded(tuple):
-    """``(results, failures)``: results by shape name, and one dict per failed shape."""
+    """``(results, failures)``: results by shape name, and one dict per failed shape.
+
+    What :func:`load` returns; it unpacks as a pair and names its parts.
+
+    Parameters
+    ----------
+    results : dict of str -> ShapeResult
+        Every completed shape.
+    failures : list of dict
+        One dict per failed or damaged shape (``name``, ``source``, ``error``...).
+
+    Attributes
+    ----------
+    results, failures
+        The two parts by name.
+
+    Examples
+    --------
+    >>> from spectral_igl.collection import Loaded
+    >>> got = Loaded({}, [{"name": "bad", "source": "bad.obj", "error": "no faces"}])
+    >>> results, failures = got
+    >>> print(got.failure_table())
+    name  source   error
+    bad   bad.obj  no faces
+    """
 
     def __new__(cls, results, failures):
         return super().__new__(cls, (results, failures))
@@ -595,6 +638,19 @@ def load(out, arrays: bool = True) -> Loaded:
         ``damaged: True`` and the problem in ``error``, never among the results; a rerun
         of :func:`~spectral_igl.collection.run` recomputes it. Groups left half-written by
         an interruption (under ``.partial``) are never listed.
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.collection import Job, load, run
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(2)
+    >>> _ = run({"ball": (V, F)}, Job.eigenvalues(4), "ball.zarr", workers=1, progress=False)
+    >>> results, failures = load("ball.zarr")
+    >>> ev = results["ball"].arrays["eigenvalues"]
+    >>> bool(np.all(np.abs(ev - sig.dense_eigs(sig.laplacian(V, F))[0][:4])
+    ...             <= results["ball"].abs_error("eigenvalues") + 1e-12))
+    True
     """
     root = Path(out)
     open_root(out, mode="r")
