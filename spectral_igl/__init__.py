@@ -15,17 +15,24 @@ from . import accuracy, filters, linalg
 from ._validate import memory_budget, set_memory_budget
 from ._version import __version__
 from .applications import (
+                           Correspondence,
                            CriticalPoints,
                            HeatGeodesics,
                            critical_points,
                            diffusion_basis,
                            diffusion_smooth,
                            feature_points,
+                           functional_map,
                            geodesic_distance,
                            harmonic,
                            heat_trace,
+                           landmark_descriptors,
+                           map_error,
+                           match_shapes,
                            mean_curvature_flow,
                            optimal_time,
+                           pair_descriptors,
+                           point_map,
                            schrodinger,
                            shape_distance,
                            shape_distance_matrix,
@@ -36,6 +43,7 @@ from .applications import (
                            varadhan_distance,
                            wasserstein_barycenter,
                            wasserstein_distance,
+                           zoomout,
 )
 from .approx import METHODS, SpectralOperator, apply_filter, spectral_operator
 from .descriptors import (
@@ -110,7 +118,8 @@ __all__ = [
     "diffusion_smooth", "optimal_time", "optimal_shape_time", "HeatGeodesics", "geodesic_distance",
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger", "mean_curvature_flow", "shape_dna", "heat_trace", "shape_distance",
-    "shape_distance_matrix",
+    "shape_distance_matrix", "Correspondence", "match_shapes", "pair_descriptors",
+    "landmark_descriptors", "functional_map", "point_map", "zoomout", "map_error",
 ]
 
 # --- collection ---
