@@ -19,7 +19,7 @@ SCRIPTS = [
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
     "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
-    "fig26_truncated_smoothing", "fig_mcf",
+    "fig26_truncated_smoothing", "fig_mcf", "fig_correspondence",
 ]
 
 
@@ -210,3 +210,9 @@ def test_fig_mcf(tmp_path):
     assert np.all(np.diff(r["roundness"]) < 0) and r["roundness"][-1] < 0.5 * r["roundness"][0]
     assert r["area_change"] < 1e-12
     assert r["min_area_ratio_conformal"] > 1e-3
+
+
+def test_fig_correspondence(tmp_path):
+    r = run("fig_correspondence", tmp_path)
+    assert r["n_target"] > r["n_source"]                 # a different, finer mesh
+    assert r["mean_error"] < 0.02 and r["random_error"] > 0.3
