@@ -595,8 +595,8 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     --------
     >>> import numpy as np, spectral_igl as sig
     >>> from spectral_igl.data_generators import icosphere
-    >>> V, F = icosphere(3)
-    >>> V = V * [1.0, 0.8, 0.6] + 0.3 * V[:, :1] ** 2        # no symmetry left
+    >>> V, F = icosphere(2)
+    >>> V = V * [1.0, 0.8, 0.6] + 0.3 * V[:, :1] ** 2 + 0.15 * V[:, 1:2] * V[:, 2:3]  # no symmetry
     >>> perm = np.random.default_rng(0).permutation(len(V))
     >>> inv = np.argsort(perm)
     >>> res = sig.match_shapes((V, F), (V[perm], inv[F]), k=10, k_final=30, n_descriptors=10)
