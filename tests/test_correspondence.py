@@ -96,7 +96,7 @@ def test_functional_map_minimises_its_energy(mu_d):
     C = sig.functional_map(l1, l2, D1, D2, b1, b2, laplacian_weight=0.3, commutativity_weight=mu_d)
     assert C.shape == (5, 6)
     A, Bh = b1[1].T @ l1.B @ D1, b2[1].T @ l2.B @ D2
-    M = (b1[0][None, :] - b2[0][:, None]) ** 2
+    M = (l1.area() * b1[0][None, :] - l2.area() * b2[0][:, None]) ** 2
     P1 = np.einsum("ni,np,nj->pij", l1.B @ b1[1], D1, b1[1])
     P2 = np.einsum("ni,np,nj->pij", l2.B @ b2[1], D2, b2[1])
     w = (1 / (4 * np.mean(Bh ** 2)), 0.3 / np.mean(M),

@@ -149,8 +149,8 @@ def pair_descriptors(lap1, lap2, kind: str = "wks", n: int = 100, k: int = 200,
     \sum_l e^{-(e - \log\lambda_l)^2/2\sigma^2}`; HKS at time t:
     :math:`K_t(x, x) = \sum_l e^{-t\lambda_l}\phi_l(x)^2`. Both are evaluated from the diagonal
     of a kernel, without eigenpairs. Measured (``benchmarks/correspondence.py``): the own grid
-    is at least as good as the common one for WKS, and much better for HKS on pairs that are
-    not at the same scale.
+    gave 0.15 (WKS) and 0.25 (HKS) against 0.56 and 0.55 for the common grid on a stretched
+    pair scaled by 1.5.
 
     Examples
     --------
@@ -270,7 +270,8 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     Notes
     -----
     With :math:`A = \Phi_1^\top B_1 D_1` and :math:`\hat B = \Phi_2^\top B_2 D_2` the
-    descriptors' coefficients, :math:`M_{ij} = (\lambda^{(1)}_j - \lambda^{(2)}_i)^2` and
+    descriptors' coefficients, :math:`M_{ij} = (|M_1|\lambda^{(1)}_j - |M_2|\lambda^{(2)}_i)^2`
+    (eigenvalues times the areas, invariant to scale) and
     :math:`P^{(s)}_q = \Phi_s^\top B_s \operatorname{diag}(d^{(s)}_q)\Phi_s`, C minimises
 
     .. math:: \frac{\|CA - \hat B\|_F^2}{\tau_D}
@@ -310,7 +311,8 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     mu_l = as_nonnegative(laplacian_weight, "laplacian_weight")
     mu_d = as_nonnegative(commutativity_weight, "commutativity_weight")
     A, Bh = X1.T @ (lap1.B @ D1), X2.T @ (lap2.B @ D2)
-    M = np.square(ev1[None, :] - ev2[:, None])
+    # eigenvalues times the area: the commutativity does not depend on the shapes' scales
+    M = np.square(lap1.area() * ev1[None, :] - lap2.area() * ev2[:, None])
     p = D1.shape[1]
     w_d, w_l = 1.0 / (p * _scale(np.square(Bh))), mu_l / _scale(M)
     G, R = w_d * (A @ A.T), w_d * (Bh @ A.T)                      # (k1, k1), (k2, k1)
