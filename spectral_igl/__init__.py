@@ -15,17 +15,24 @@ from . import accuracy, filters, linalg
 from ._validate import memory_budget, set_memory_budget
 from ._version import __version__
 from .applications import (
+                           Correspondence,
                            CriticalPoints,
                            HeatGeodesics,
                            critical_points,
                            diffusion_basis,
                            diffusion_smooth,
                            feature_points,
+                           functional_map,
                            geodesic_distance,
                            harmonic,
                            heat_trace,
+                           landmark_descriptors,
+                           map_error,
+                           match_shapes,
                            mean_curvature_flow,
                            optimal_time,
+                           pair_descriptors,
+                           point_map,
                            retrieval_scores,
                            schrodinger,
                            shape_distance,
@@ -37,6 +44,7 @@ from .applications import (
                            varadhan_distance,
                            wasserstein_barycenter,
                            wasserstein_distance,
+                           zoomout,
 )
 from .approx import METHODS, SpectralOperator, apply_filter, spectral_operator
 from .descriptors import (
@@ -112,6 +120,8 @@ __all__ = [
     "varadhan_distance", "wasserstein_distance", "wasserstein_barycenter", "diffusion_basis", "feature_points",
     "schrodinger", "mean_curvature_flow", "shape_dna", "heat_trace", "shape_distance",
     "shape_distance_matrix", "retrieval_scores",
+    "Correspondence", "match_shapes", "pair_descriptors",
+    "landmark_descriptors", "functional_map", "point_map", "zoomout", "map_error",
 ]
 
 # --- collection ---

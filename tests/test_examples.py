@@ -19,7 +19,7 @@ SCRIPTS = [
     "fig06_conditioning", "fig07_17_timing", "fig08_volumetric_heat", "fig09_distances",
     "fig10_filters", "fig11_12_biharmonic_stability", "fig13_14_accuracy", "fig15_gibbs",
     "fig16_tradeoff", "fig18_23_robustness", "fig24_26_smoothing", "fig25_constrained_smoothing",
-    "fig26_truncated_smoothing", "fig_mcf", "fig_retrieval",
+    "fig26_truncated_smoothing", "fig_mcf", "fig_retrieval", "fig_correspondence",
 ]
 
 
@@ -219,3 +219,9 @@ def test_fig_retrieval(tmp_path):
     assert r["difference_to_direct"] == 0.0 and r["bound_kind"] == "proof" and r["largest_bound"] < 1e-8
     assert r["rerun_skipped"] == 16 and not r["matrix_recomputed_on_rerun"] and r["rerun_equal"]
     assert r["nn_accuracy"] == 1.0 and r["map"] == 1.0
+
+
+def test_fig_correspondence(tmp_path):
+    r = run("fig_correspondence", tmp_path)
+    assert r["n_target"] > r["n_source"]                 # a different, finer mesh
+    assert r["mean_error"] < 0.02 and r["random_error"] > 0.3

@@ -1,8 +1,10 @@
 """Applications built on the engine: harmonic functions and critical points, smoothing,
 time-scale selection, geodesic and transport distances, basis functions, waves,
-mean-curvature flow, shape comparison."""
+mean-curvature flow, shape comparison, shape correspondence."""
 from .basis import diffusion_basis, feature_points, graph_extrema
 from .compare import heat_trace, retrieval_scores, shape_distance, shape_distance_matrix, shape_dna
+from .correspondence import (Correspondence, functional_map, landmark_descriptors, map_error,
+                             match_shapes, pair_descriptors, point_map, zoomout)
 from .critical_points import CriticalPoints, critical_points
 from .geodesics import HeatGeodesics, geodesic_distance, varadhan_distance
 from .harmonic import harmonic
@@ -20,4 +22,6 @@ __all__ = [
     "diffusion_basis", "feature_points", "graph_extrema",
     "schrodinger", "mean_curvature_flow",
     "shape_dna", "heat_trace", "shape_distance", "shape_distance_matrix", "retrieval_scores",
+    "Correspondence", "match_shapes", "pair_descriptors", "landmark_descriptors", "functional_map",
+    "point_map", "zoomout", "map_error",
 ]
