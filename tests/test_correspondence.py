@@ -36,6 +36,16 @@ def test_permuted_copy_is_recovered_exactly():
     assert set(res.seconds) == {"eigs", "descriptors", "fit", "zoomout"}
 
 
+@pytest.mark.parametrize("scale", [1.5, 1e-3, 1e3])
+def test_a_scaled_copy_is_matched_as_the_copy(scale):
+    # B-orthonormal eigenvectors scale as 1/size: without unit measure a copy 1.5 times
+    # larger matched only 15% of its vertices
+    V, F = lumpy(2)
+    W, G, perm = permuted(V, F)
+    res = sig.match_shapes((V, F), (scale * W, G), k=10, k_final=30, n_descriptors=10, method="dense")
+    assert np.array_equal(res.p2p, perm)
+
+
 def test_remeshed_pair_has_a_small_error():
     V, F = lumpy(2)
     W, G = resample(V, F, 0.5, seed=1)            # different connectivity and size

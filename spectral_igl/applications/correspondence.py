@@ -31,7 +31,8 @@ import numpy as np
 from .._validate import as_array, as_choice, as_int, as_nonnegative, check_dense_size, describe
 from ..descriptors import hks, hks_times, wks, wks_energies
 from ..kernels import heat_kernels
-from ..laplacian import as_laplacian
+from ..laplacian import as_laplacian, make_laplacian
+from ..laplacian.units import dimension
 from ..linalg import eigs
 
 __all__ = ["pair_descriptors", "landmark_descriptors", "functional_map", "point_map", "zoomout",
@@ -230,6 +231,25 @@ def landmark_descriptors(lap, landmarks, times=None, n_times: int = 16, k: int =
 
 
 # ----------------------------------------------------------------------------- the map
+
+def unit_measure(lap):
+    r"""The same shape scaled to unit area (unit volume for solids): :math:`\tilde B = B/A`,
+    :math:`\tilde L = A^{2/d - 1} L` (:math:`A = \mathbf 1^\top B \mathbf 1`, d the dimension),
+    so that :math:`\tilde B^{-1}\tilde L = A^{2/d} B^{-1} L`; ``lap`` itself when A is 1.
+
+    Functional maps compare eigenvectors of two shapes row by row; B-orthonormal eigenvectors
+    scale as :math:`A^{-1/2}`, so shapes of different sizes are matched at unit measure.
+    """
+    A = lap.area()
+    if np.isclose(A, 1.0, rtol=1e-12, atol=0.0):
+        return lap
+    d = dimension(lap) or 2           # a graph: the mass normalised, L kept
+    data = dict(lap.data)
+    for key in ("V", "P"):
+        if key in data and data[key] is not None:
+            data[key] = np.asarray(data[key], dtype=float) / A ** (1.0 / d)
+    return make_laplacian(lap.L * A ** (2.0 / d - 1.0), lap.B / A, domain=lap.domain, data=data)
+
 
 def _scale(values):
     """A term's normaliser: the mean of ``values``, 1 if it is zero."""
@@ -592,6 +612,8 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     Returns
     -------
     Correspondence
+        The point map, and the functional maps in the eigenbases of the two shapes scaled
+        to unit area (:func:`unit_measure`): the result does not depend on the shapes' sizes.
 
     Examples
     --------
@@ -608,6 +630,7 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     lap1, lap2 = as_laplacian(lap1, "lap1"), as_laplacian(lap2, "lap2")
     k = as_int(k, "k", lo=2)
     k_final = as_int(k_final, "k_final", lo=k)
+    lap1, lap2 = unit_measure(lap1), unit_measure(lap2)
     seconds = {}
     t = time.perf_counter()
     basis1, basis2 = eigs(lap1, k_final), eigs(lap2, k_final)
