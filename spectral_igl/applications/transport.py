@@ -527,11 +527,14 @@ def wasserstein_distance(lap, mu0, mu1, gamma=None, kernel: str = "auto", steps:
     (:func:`density_support`): one heat-method solve per such vertex and their number
     squared in memory, whatever the size of the mesh; a density spread over the whole
     shape costs n solves and :math:`n^2` memory (refused beyond the memory budget, with
-    ``kernel="heat"`` as the alternative). Measured (``benchmarks/transport.py``, bumps of
-    width h, unit area, against ``igl.exact_geodesic``, :math:`\gamma = 10h^2`): :math:`W/d - 1`
-    from -3.0% to -0.2% at d = 4h to 30h on cow (n = 2.9k; 0.1-0.6 s per call, 8 iterations),
-    from -2.2% to +0.3% on armadillo (n = 43k; 9 to 12 s per call, nearly all of it the
-    300-430 heat-method solves, 9 iterations).
+    ``kernel="heat"`` as the alternative). Measured (``benchmarks/transport.py --cpu``, bumps
+    of width h, unit area, against ``igl.exact_geodesic``, process time of a first call on a
+    fresh Laplacian): :math:`W/d - 1` from -3.0% to -0.2% at d = 4h to 30h on cow and
+    -4.2% to 0.0% on spot (n = 2.9k, :math:`\gamma = 10h^2` and :math:`40h^2` alike;
+    0.07-0.26 s per call, 5-21 iterations, the kernel on 131-667 vertices), ARMADILLO.
+    With the default ``gamma`` on cow: Diracs 0.03 s, bumps of width h 0.2 s, of width 5h
+    (the kernel on 2,535 of 2,903 vertices) 2.1 s, a density spread over the whole shape
+    against the uniform one 4.7 s (123 over-relaxed iterations; 868 plain ones).
 
     *Where the heat kernel is accurate.* For narrow bumps the divergence is Varadhan's estimate
     :math:`-\gamma\log\big(K(p,q)/\sqrt{K(p,p)K(q,q)}\big)`, which needs the discrete heat
@@ -637,8 +640,9 @@ def wasserstein_barycenter(lap, mus, gamma=None, weights=None, kernel: str = "au
 
     Notes
     -----
-    Warns when the iterations did not converge (``info["converged"]`` False). Measured
-    (``benchmarks/transport.py --barycenter``): see the benchmark's table.
+    Warns when the iterations did not converge (``info["converged"]`` False). Measured on
+    cow at the default ``gamma``: two bumps of width h at the ends of the shape, 11
+    iterations, the kernel from 474 vertices to all 2,903, 0.2 s of process time.
 
     Examples
     --------
