@@ -310,8 +310,9 @@ def _sinkhorn_block(heat, A, B, gamma, max_iter, tol):
 
     :data:`RELAX_WINDOW` plain iterations after as many more (the first ones drop
     faster) measure the rate, then both updates are
-    over-relaxed by :func:`relaxation_factor` (back to plain if the error grows a
-    thousandfold or makes no new low in 5 windows). The
+    over-relaxed by :func:`relaxation_factor`, and plain again to the end if the error grows
+    a thousandfold or its rate over a window is no better than the plain one (a mode that
+    relaxation slows, e.g. the oscillation of a symmetric problem). The
     result always ends on a plain update of ``w``, so that the second marginal is exact
     and the first is the reported ``marginal_error``.
     """
@@ -321,7 +322,7 @@ def _sinkhorn_block(heat, A, B, gamma, max_iter, tol):
     logv = np.where(sA, 0.0, -np.inf)
     logw = np.where(sB, 0.0, -np.inf)
     err = np.full(A.shape[1], np.inf)
-    history, omega, plain, it = [], 1.0, True, 0
+    history, omega, plain, relax, plain_rate, it = [], 1.0, True, True, 1.0, 0
 
     def first_marginal_error(logv, kw):
         marg = np.where(sA, np.exp(np.where(sA, logv + kw, -np.inf)), 0.0)
@@ -342,10 +343,11 @@ def _sinkhorn_block(heat, A, B, gamma, max_iter, tol):
             continue
         e = float(err.max())
         history.append(e)
-        if omega > 1.0 and (e > 1e3 * min(history) or int(np.argmin(history)) < len(history) - 5 * RELAX_WINDOW):
-            omega, history = 1.0, [e]              # relaxation not converging here: plain again
-        elif omega == 1.0 and len(history) > 2 * RELAX_WINDOW:
-            omega = relaxation_factor((e / history[-1 - RELAX_WINDOW]) ** (1.0 / RELAX_WINDOW))
+        rate = (e / history[-1 - RELAX_WINDOW]) ** (1.0 / RELAX_WINDOW) if len(history) > 2 * RELAX_WINDOW else None
+        if omega > 1.0 and (e > 1e3 * min(history) or (rate is not None and not rate < plain_rate)):
+            omega, relax = 1.0, False              # relaxed slower than plain here: plain to the end
+        elif omega == 1.0 and relax and rate is not None:
+            omega, plain_rate, history = relaxation_factor(rate), rate, [e]
         logv = relaxed(logv, np.where(sA, logA - kw, -np.inf), omega)
         logw = relaxed(logw, np.where(sB, logB - heat.log_apply(logv), -np.inf), omega)
         plain = omega == 1.0
@@ -531,7 +533,10 @@ def wasserstein_distance(lap, mu0, mu1, gamma=None, kernel: str = "auto", steps:
     of width h, unit area, against ``igl.exact_geodesic``, process time of a first call on a
     fresh Laplacian): :math:`W/d - 1` from -3.0% to -0.2% at d = 4h to 30h on cow and
     -4.2% to 0.0% on spot (n = 2.9k, :math:`\gamma = 10h^2` and :math:`40h^2` alike;
-    0.07-0.26 s per call, 5-21 iterations, the kernel on 131-667 vertices), ARMADILLO.
+    0.07-0.26 s per call, 5-21 iterations, the kernel on 131-667 vertices); on armadillo
+    (n = 43k, :math:`\gamma = 10h^2`) from -2.2% to +0.3% (4h: +0.3%, 8h: -1.3%, 12h:
+    -2.2%, 20h: -1.0%, 30h: -0.2%), 3.3-7.0 s per call, nearly all of it the 273-426
+    heat-method solves, 9 iterations.
     With the default ``gamma`` on cow: Diracs 0.03 s, bumps of width h 0.2 s, of width 5h
     (the kernel on 2,535 of 2,903 vertices) 2.1 s, a density spread over the whole shape
     against the uniform one 4.7 s (123 over-relaxed iterations; 868 plain ones).
