@@ -14,7 +14,7 @@ from .geodesics import HeatGeodesics
 from .heat_steps import PositiveHeat, log_apply
 
 __all__ = ["wasserstein_distance", "sinkhorn", "wasserstein_barycenter", "GeodesicKernel", "KERNELS",
-           "SUPPORT_TAIL", "GAMMA_H2", "density_support"]
+           "SUPPORT_TAIL", "GAMMA_H2", "GEODESIC_DOMAINS", "density_support", "relaxation_factor"]
 
 #: ``kernel`` choices of the transport functions
 KERNELS = ("auto", "geodesic", "heat")
