@@ -371,7 +371,7 @@ def budget():
     (lambda: sig.apply_filter(LAP, sig.filters.heat(0.1), np.ones((N, 2000), np.int8)),
      r"f of shape \(162, 2000\) as float64 would take 2.5 MiB"),
     (lambda: sig.apply_filter(LAP, sig.filters.heat(0.1), np.ones((N, 100))), "work arrays of the engine"),
-    (lambda: sig.set_memory_budget(5 * 10 ** 5) or sig.wasserstein_distance(LAP, BUMP0, BUMP1, 0.3,
+    (lambda: sig.set_memory_budget(5 * 10 ** 5) or sig.wasserstein_distance(LAP, np.ones(N), BUMP1, 0.3,
                                                                            kernel="geodesic"),
      r"dense \(162, 162\) geodesic kernel .* use kernel='heat'"),
     (lambda: sig.voxel_laplacian(np.broadcast_to(True, (3000, 3000, 3000))),
