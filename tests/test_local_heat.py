@@ -108,3 +108,42 @@ def test_bad_source():
     lap, _, _ = _exact("icosphere")
     with pytest.raises(ValueError, match="source"):
         sig.local_heat_kernel(lap, 1e-3, lap.n)
+
+
+@pytest.mark.parametrize("name, sources, t", [("grid", 300, 1e-5), ("two", [5, 650], 2e-4),
+                                              ("icosphere", [7, 100], 5e-5)])
+def test_auto_heat_kernel_takes_the_local_path(monkeypatch, name, sources, t):
+    monkeypatch.setattr(sig.kernels, "LOCAL_MIN_VERTICES", 0)
+    lap, w, X = _exact(name)
+    k, info = sig.heat_kernel(lap, t, sources, return_info=True)
+    exact = (X * np.exp(-t * w)) @ X[sources].T
+    assert info["method"] == "local" and info["bound_kind"] == "proof" and k.shape == exact.shape
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+    target = 1e-8 / np.sqrt(lap.mass[sources])
+    assert np.all(info["bnorm_error"] <= target)
+    # the same column as the explicit call
+    first = np.atleast_1d(sources)[0]
+    k0 = k if k.ndim == 1 else k[:, 0]
+    assert np.array_equal(k0, sig.local_heat_kernel(lap, t, first))
+
+
+def test_auto_heat_kernel_declines_large_regions(monkeypatch):
+    monkeypatch.setattr(sig.kernels, "LOCAL_MIN_VERTICES", 0)
+    lap, w, X = _exact("icosphere")
+    k, info = sig.heat_kernel(lap, 0.05, 3, return_info=True)
+    exact = X @ (np.exp(-0.05 * w) * X[3])
+    assert info["method"] == "rational" and info["note"].startswith("local column declined")
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+
+
+def test_auto_local_above_the_threshold():
+    """Above LOCAL_MIN_VERTICES without any patch, against the global path's own proof."""
+    V, F = icosphere(5)
+    lap = sig.laplacian(V, F)
+    lap = sig.laplacian(V / np.sqrt(lap.area()), F)
+    assert lap.n > sig.kernels.LOCAL_MIN_VERTICES
+    k, info = sig.heat_kernel(lap, 1e-5, 11, return_info=True)
+    ref, rinfo = sig.heat_kernel(lap, 1e-5, 11, method="rational", tol=1e-10, return_info=True)
+    assert info["method"] == "local" and info["region"] < lap.n // 20
+    assert np.all(np.abs(k - ref) <= info["abs_error"] + rinfo["abs_error"])
+    assert info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass[11])
