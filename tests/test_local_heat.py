@@ -147,3 +147,29 @@ def test_auto_local_above_the_threshold():
     assert info["method"] == "local" and info["region"] < lap.n // 20
     assert np.all(np.abs(k - ref) <= info["abs_error"] + rinfo["abs_error"])
     assert info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass[11])
+
+
+@pytest.mark.parametrize("name, source", [("grid", 0), ("grid", 300), ("two", 5), ("icosphere", 7)])
+@pytest.mark.parametrize("t", [1e-5, 1e-4])
+def test_local_mexican_hat_within_its_proved_bound(name, source, t):
+    lap, w, X = _exact(name)
+    exact = X @ (t * w * np.exp(-t * w) * X[source])
+    h, info = sig.local_mexican_hat(lap, t, source, return_info=True)
+    assert info["method"] == "local" and info["bound_kind"] == "proof"
+    scale = np.abs(exact).max()
+    assert np.all(np.abs(h - exact) <= info["abs_error"] + REFERENCE * scale * max(1.0, t * w.max()))
+    assert info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass[source])
+    # sparse: zero beyond one ring of the heat column's region
+    assert np.count_nonzero(h) < lap.n // 2
+    # the bound is not vacuous: the column's B-norm error is within 1e4 of it or far below tol
+    diff = h - exact
+    assert np.sqrt(diff @ (lap.mass * diff)) * 1e4 >= info["bnorm_error"] or \
+        info["bnorm_error"] < 1e-2 * 1e-8 / np.sqrt(lap.mass[source])
+
+
+def test_local_mexican_hat_falls_back_at_large_t():
+    lap, w, X = _exact("icosphere")
+    h, info = sig.local_mexican_hat(lap, 0.05, 3, return_info=True)
+    exact = X @ (0.05 * w * np.exp(-0.05 * w) * X[3])
+    assert info["method"].startswith("global") and "region" in info["note"]
+    assert np.all(np.abs(h - exact) <= info["abs_error"] + REFERENCE * np.abs(exact).max())
