@@ -54,16 +54,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._validate import as_flag, as_index, as_tol
+from ._validate import as_flag, as_index, as_int, as_tol
 from .accuracy import info as make_info
 from .accuracy import warn_missed
 from .approx import choose_method
-from .approx.region import region_heat_column
+from .approx.region import (GROWTH, MAX_FRACTION, dirichlet_heat, first_radius, grow_region, patches,
+                            region_heat_column, vertex_spacing)
 from .filters import heat, mexican_hat
 from .kernels import heat_kernel, spectral_kernel
 from .laplacian import Laplacian, as_laplacian, shape_time
 
-__all__ = ["local_heat_kernel", "local_mexican_hat"]
+__all__ = ["local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel"]
 
 U = 2.0 ** -53
 
@@ -257,3 +258,209 @@ def _heat_derivative(lap, t, K, E):
 
 def _gamma(k):
     return k * U / (1.0 - k * U)
+
+
+def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 64,
+                       return_info: bool = False, time_unit: str = "absolute"):
+    r"""The whole heat kernel matrix :math:`K_t = e^{-t\tilde L}B^{-1}` as a certified sparse matrix.
+
+    Every column :math:`K_t(:, s)` is solved on a region around its source, as by
+    :func:`local_heat_kernel`, by blocks of :data:`block` neighbouring sources that share one
+    region and one block of sparse products; every entry at or above ``threshold`` times its
+    column's peak is kept, and what is dropped is bounded, entry by entry and in mass.
+
+    Parameters
+    ----------
+    lap : Laplacian
+        Metzler (see :func:`local_heat_kernel`).
+    t : float
+        Time, in ``time_unit`` (see :func:`~spectral_igl.heat_kernel`).
+    threshold : float
+        In (0, 1): entries below this share of their column's computed peak are dropped.
+    tol : float
+        Each column before dropping is proved within ``tol`` :math:`\cdot\|B^{-1}e_s\|_B` in
+        the B-norm (as :func:`~spectral_igl.heat_kernel`).
+    block : int
+        Sources per shared region.
+    return_info : bool
+    time_unit : {"absolute", "shape", "h2"}
+
+    Returns
+    -------
+    K : (n, n) scipy.sparse.csr_matrix
+        Symmetric, non-negative: :math:`K_{ij} \approx k_t(x_i, x_j) = (K_t)_{ij}`.
+    info : dict, with ``return_info``
+        ``abs_error`` (n, n) csr_matrix with K's pattern: a proved bound of each stored
+        entry's error; ``dropped_max`` (n,): every entry of column j that K does not store lies
+        in [0, ``dropped_max[j]``]; ``dropped_mass`` (n,): a proved bound of
+        :math:`\sum_{i\ \text{not stored}} B_{ii}(K_t)_{ij}`; ``m_lost`` (n,): the heat of each
+        column outside its region; ``bnorm_error`` (n,); ``region`` (n,) (vertices of each
+        column's region); ``products`` (sparse products of the whole operator spent in all);
+        ``bound_kind`` ``"proof"``; ``method`` ``"local"``; ``tol``; ``threshold``; ``time``.
+
+    Raises
+    ------
+    ValueError
+        When ``lap`` is not Metzler, on a bad argument, or when t is so large that a column's
+        column would keep more than :data:`~spectral_igl.approx.region.MAX_FRACTION` of its
+        entries (the kernel is not sparse: use :func:`~spectral_igl.heat_kernel` columns).
+
+    Notes
+    -----
+    With a lumped mass :math:`K_t = B^{-1/2}e^{-tB^{-1/2}LB^{-1/2}}B^{-1/2}` is symmetric, and
+    :math:`(K_t)_{ij}` is the discrete kernel :math:`k_t(x_i, x_j)`. A column c of the computed
+    matrix C holds :math:`u_{ic}` (the region's Dirichlet kernel, see :func:`local_heat_kernel`)
+    where :math:`u_{ic} \ge` ``threshold`` :math:`\max_i u_{ic}`, with
+    :math:`|u_{ic} - (K_t)_{ic}| \le \beta_{ic} = e_{ic} + m_c/B_{ii}`. Then
+    :math:`K = (C + C^\top) \oslash N`, N counting how many of :math:`C_{ij}, C_{ji}` are
+    stored (1 or 2): each stored entry is the mean of the computed values available for it, and
+    within the mean of their bounds. Column c drops entries of its region with
+    :math:`u_{ic} + e_{ic} \le \texttt{cut}_c` and every vertex outside it, so a dropped
+    :math:`(K_t)_{ic} \le \texttt{cut}_c + m_c/\min_i B_{ii}` = ``dropped_max``, and
+    their B-weighted sum is at most
+    :math:`\sum_{i \in R,\ \text{dropped}} B_{ii}(u_{ic} + e_{ic}) + m_c` = ``dropped_mass``
+    (the symmetric fill only stores more, so both stay bounds for K). Bounds are rounded up.
+
+    Examples
+    --------
+    >>> import numpy as np, spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> K, info = sig.sparse_heat_kernel(lap, 1e-3, return_info=True)
+    >>> bool(abs(K - K.T).max() == 0), K.nnz < lap.n ** 2 // 4
+    (True, True)
+    >>> full = sig.heat_kernel(lap, 1e-3, 5, tol=1e-12)
+    >>> stored = K[:, [5]].toarray()[:, 0] > 0
+    >>> bool(np.all(np.abs(full - K[:, [5]].toarray()[:, 0])[stored]
+    ...             <= info["abs_error"][:, [5]].toarray()[stored, 0] + 1e-12 * full.max()))
+    True
+    """
+    lap = as_laplacian(lap)
+    if not lap.is_metzler:
+        raise ValueError("sparse_heat_kernel needs a Metzler Laplacian (lumped mass and non-negative "
+                         f"edge weights), got {lap!r}: build it with mass='lumped' and positive=True "
+                         "(the default of sig.laplacian on triangle meshes)")
+    t = float(shape_time(lap, t, time_unit))
+    threshold = as_tol(threshold, "threshold")
+    tol = as_tol(tol, "tol")
+    block = as_int(block, "block", lo=1)
+    return_info = as_flag(return_info, "return_info")
+    n = lap.n
+    parts = {k: [] for k in ("rows", "cols", "vals", "errs")}
+    per = {k: np.zeros(n) for k in ("dropped_max", "dropped_mass", "m_lost", "bnorm_error", "region")}
+    ctx = _context(lap, t, threshold, tol)
+    products = 0.0
+    for sources in patches(lap.L, block):
+        products += _sparse_block(ctx, sources, parts, per)
+    K, E = _symmetric(n, parts)
+    warn_missed("sparse_heat_kernel", per["bnorm_error"], tol / np.sqrt(lap.mass), stacklevel=3)
+    if not return_info:
+        return K
+    per["region"] = per["region"].astype(np.int64)
+    info = make_info(0.0, "proof", "local", tol=tol, threshold=threshold, products=products, **per)
+    info["abs_error"] = E                      # sparse, with K's pattern
+    return K, info
+
+
+def _context(lap, t, threshold, tol):
+    """What every block of :func:`sparse_heat_kernel` reads: the mass, the components with
+    their sizes, smallest masses and areas, the spacing, read once."""
+    mass = lap.mass
+    labels = lap.components
+    count = np.bincount(labels)
+    area = np.bincount(labels, weights=mass)
+    smallest = np.full(count.size, np.inf)
+    np.minimum.at(smallest, labels, mass)
+    return {"lap": lap, "t": t, "threshold": threshold, "tol": tol, "mass": mass, "labels": labels,
+            "count": count, "area": area, "smallest": smallest, "h2": vertex_spacing(lap), "radius": 0.0}
+
+
+def _sparse_block(ctx, sources, parts, per):
+    """Solve the columns of ``sources`` (one patch, one component) on shared regions, grown for
+    the columns that miss their target; keep their entries above the threshold. Returns the
+    products spent (of the whole operator)."""
+    lap, t, mass, h2 = ctx["lap"], ctx["t"], ctx["mass"], ctx["h2"]
+    L = lap.L
+    label = ctx["labels"][sources[0]]
+    size, min_mass = int(ctx["count"][label]), float(ctx["smallest"][label])
+    target = ctx["tol"] / np.sqrt(mass[sources])
+    goal = 0.5 * target * np.sqrt(min_mass)
+    tail = min(1e-3 * ctx["tol"] * float(np.sqrt(np.min(mass[sources]) / ctx["area"][label])), 1e-3)
+    # a neighbouring patch's final radius is the likeliest start
+    radius = max(max(first_radius(t, h2[s], g) for s, g in zip(sources, goal)), ctx["radius"])
+    spent = 0.0
+    while sources.size:
+        R, _ = grow_region(L, h2, sources, radius, limit=max(int(MAX_FRACTION * size), 1))
+        R = np.flatnonzero(ctx["labels"] == label) if R is None else R
+        u, e, lost, k = dirichlet_heat(lap, t, R, sources, tail, mass)
+        spent += k * float(np.sum(L.indptr[R + 1] - L.indptr[R])) / L.nnz
+        bnorm = (lost / np.sqrt(min_mass) + np.sqrt(mass[R] @ (e * e))) * (1.0 + 1e-12)
+        done = (bnorm <= target) | (R.size == size)
+        for c in np.flatnonzero(done):
+            _keep(ctx, R, sources[c], u[:, c], e[:, c], float(lost[c]), min_mass, parts, per)
+            per["bnorm_error"][sources[c]] = bnorm[c]
+            per["region"][sources[c]] = R.size
+        sources, target, goal, lost = sources[~done], target[~done], goal[~done], lost[~done]
+        if sources.size:
+            radius *= _growth(goal, lost)
+    ctx["radius"] = 0.9 * radius
+    return spent
+
+
+def _growth(goal, lost):
+    """Factor of the radius for the columns whose lost heat ``lost`` missed ``goal``: a
+    Gaussian's tail, log(1/m) growing like the squared radius."""
+    if not lost.size or not (np.all(lost < 1.0) and np.all(goal < 1.0)):
+        return 2.0
+    return max(GROWTH, 1.05 * float(np.max(np.sqrt(np.log(1.0 / goal) / np.log(1.0 / np.maximum(lost, 1e-300))))))
+
+
+def _keep(ctx, R, source, u, e, lost, min_mass, parts, per):
+    """Store one column's entries at or above the threshold with their bounds, and bound what
+    it drops (notes of :func:`sparse_heat_kernel`)."""
+    mass, n, threshold = ctx["mass"], ctx["mass"].size, ctx["threshold"]
+    keep = u >= threshold * np.max(u)
+    rows = R[keep]
+    if rows.size > MAX_FRACTION * n:
+        raise ValueError(f"t = {ctx['t']:g}: column {source} keeps {rows.size} of the {n} entries (more "
+                         f"than {MAX_FRACTION:g}) at threshold {threshold:g}; the heat kernel is not sparse "
+                         "there: ask sig.heat_kernel for the columns needed, or raise the threshold")
+    parts["rows"].append(rows.astype(np.int32))
+    parts["cols"].append(np.full(rows.size, source, dtype=np.int32))
+    parts["vals"].append(u[keep])
+    parts["errs"].append((e[keep] + lost / mass[rows]) * (1.0 + 4.0 * U))
+    top = u[~keep] + e[~keep]
+    cut = float(np.max(top, initial=0.0))
+    per["dropped_max"][source] = (cut + lost / min_mass) * (1.0 + 4.0 * U)
+    per["dropped_mass"][source] = (float(mass[R[~keep]] @ top) * (1.0 + _gamma(R.size + 2)) + lost) \
+        * (1.0 + 4.0 * U)
+    per["m_lost"][source] = lost
+
+
+def _symmetric(n, parts):
+    """(K, E) = ((C + C^T) / N, (E_C + E_C^T) / N) from the stored columns (notes of
+    :func:`sparse_heat_kernel`); the division's rounding added to E.
+
+    Each part is one column with sorted rows, so C is assembled in compressed columns without
+    sorting, and its transpose is the same arrays read by rows."""
+    order = np.argsort([c[0] if c.size else -1 for c in parts["cols"]], kind="stable")
+    counts = np.zeros(n + 1, dtype=np.int64)
+    for i in order:
+        if parts["cols"][i].size:
+            counts[parts["cols"][i][0] + 1] = parts["cols"][i].size
+    indptr = np.cumsum(counts)
+    rows = np.concatenate([parts["rows"][i] for i in order])
+    # where each stored entry of C lands in its compressed rows: C's data read by rows
+    index = sp.csc_matrix((np.arange(rows.size, dtype=float), rows, indptr), shape=(n, n)).tocsr()
+    perm = index.data.astype(np.int64)
+
+    def both(data):
+        by_rows = sp.csr_matrix((data[perm], index.indices, index.indptr), shape=(n, n))
+        return by_rows + sp.csr_matrix((data, rows, indptr), shape=(n, n))   # C + C^T
+
+    count = both(np.ones(rows.size))
+    K = both(np.concatenate([parts["vals"][i] for i in order]))
+    K.data /= count.data
+    E = both(np.concatenate([parts["errs"][i] for i in order]))
+    E.data = E.data / count.data * (1.0 + 4.0 * U) + 2.0 * U * K.data
+    return K, E

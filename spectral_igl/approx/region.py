@@ -39,7 +39,7 @@ import scipy.sparse as sp
 from ..accuracy import info as make_info
 from .uniformization import rate_matrix, terms, uniformize
 
-__all__ = ["region_heat_column", "dirichlet_heat", "grow_region", "vertex_spacing", "heat_drift",
+__all__ = ["region_heat_column", "dirichlet_heat", "grow_region", "patches", "vertex_spacing", "heat_drift",
            "first_radius", "MAX_FRACTION", "BUDGET", "GROWTH"]
 
 #: largest share of the source's component a region grows to before it takes the whole
@@ -121,7 +121,7 @@ def grow_region(L, h2, sources, radius: float, limit: int | None = None):
     dist = np.full(L.shape[0], np.inf)
     frontier = np.unique(np.atleast_1d(np.asarray(sources, dtype=np.int64)))
     dist[frontier] = 0.0
-    count, nearest_out = frontier.size, np.inf
+    count, nearest_out, rings = frontier.size, np.inf, [frontier]
     while frontier.size:
         i, j = _neighbours(L, frontier)
         new = np.isinf(dist[j])
@@ -136,13 +136,52 @@ def grow_region(L, h2, sources, radius: float, limit: int | None = None):
             nearest_out = min(nearest_out, float(np.min(d[~inside])))
         frontier = j[inside]
         dist[frontier] = d[inside]
+        rings.append(frontier)
         count += frontier.size
         if limit is not None and count > limit:
             return None, nearest_out
-    return np.flatnonzero(np.isfinite(dist)), nearest_out
+    return np.sort(np.concatenate(rings)), nearest_out
 
 
-def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float):
+def patches(L, size: int):
+    """Split the vertices into connected patches of about ``size`` vertices.
+
+    Seeds are taken in reverse Cuthill--McKee order and each patch grows ring by ring over
+    vertices not yet taken, so patches are compact and neighbouring patches are made one
+    after the other.
+
+    Parameters
+    ----------
+    L : (n, n) scipy.sparse.csr_matrix
+    size : int
+
+    Returns
+    -------
+    list of (k,) int arrays
+        Every vertex in exactly one patch, each patch within one connected component.
+    """
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    L = sp.csr_matrix(L)
+    taken = np.zeros(L.shape[0], dtype=bool)
+    out = []
+    for seed in reverse_cuthill_mckee(L, symmetric_mode=True):
+        if taken[seed]:
+            continue
+        taken[seed] = True
+        members, frontier, count = [np.array([seed])], np.array([seed]), 1
+        while count < size and frontier.size:
+            j = np.unique(_neighbours(L, frontier)[1])
+            j = j[~taken[j]][:size - count]
+            taken[j] = True
+            members.append(j)
+            count += j.size
+            frontier = j
+        out.append(np.sort(np.concatenate(members)))
+    return out
+
+
+def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float, mass=None):
     r"""Heat columns of ``sources`` on the region R with zero values outside it, with proofs.
 
     Parameters
@@ -156,6 +195,8 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float):
     sources : (m,) int
     tail : float
         Allowed truncation of the series, relative to each column's peak :math:`1/B_{ss}`.
+    mass : (n,) float, optional
+        ``lap.mass``, when the caller holds it already.
 
     Returns
     -------
@@ -171,7 +212,7 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float):
         Sparse products taken on R (per block).
     """
     sources = np.asarray(sources, dtype=np.int64).reshape(-1)
-    mass = lap.mass[R]
+    mass = (lap.mass if mass is None else mass)[R]
     alpha, P = rate_matrix(lap.L[R][:, R], mass)
     G = np.zeros((R.size, sources.size))
     pos = np.searchsorted(R, sources)
@@ -254,7 +295,7 @@ def region_heat_column(lap, t: float, source: int, tol: float, budget: float = B
             return None, {"note": f"the region's {R.size} vertices would take {cost:.3g} products "
                                   f"of the whole operator (with {spent:.3g} spent, more than "
                                   f"{budget:g})", "cost": spent}
-        u, e, lost, products = dirichlet_heat(lap, t, R, [source], tail)
+        u, e, lost, products = dirichlet_heat(lap, t, R, [source], tail, mass)
         u, e, lost = u[:, 0], e[:, 0], float(lost[0])
         spent += products * row_nnz / L.nnz
         bnorm = (lost / math.sqrt(min_mass) + math.sqrt(float(np.sum(mass[R] * e * e)))) * (1.0 + 1e-12)
