@@ -312,9 +312,10 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     matrix C holds :math:`u_{ic}` (the region's Dirichlet kernel, see :func:`local_heat_kernel`)
     where :math:`u_{ic} \ge` ``threshold`` :math:`\max_i u_{ic}`, with
     :math:`|u_{ic} - (K_t)_{ic}| \le \beta_{ic} = e_{ic} + m_c/B_{ii}`. Then
-    :math:`K = (C + C^\top) \oslash N`, N counting how many of :math:`C_{ij}, C_{ji}` are
-    stored (1 or 2): each stored entry is the mean of the computed values available for it, and
-    within the mean of their bounds. Column c drops entries of its region with
+    :math:`K = \max(C, C^\top)` entrywise (a dropped entry counting 0): each stored entry is
+    the larger of the computed values available for :math:`(K_t)_{ij} = (K_t)_{ji}`, within the
+    larger of their bounds (if :math:`a \ge b` both bracket the truth, :math:`|a - k| \le
+    \beta_a`), stored rounded up in float32. Column c drops entries of its region with
     :math:`u_{ic} + e_{ic} \le \texttt{cut}_c` and every vertex outside it, so a dropped
     :math:`(K_t)_{ic} \le \texttt{cut}_c + m_c/\min_i B_{ii}` = ``dropped_max``, and
     their B-weighted sum is at most
@@ -346,7 +347,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     block = as_int(block, "block", lo=1)
     return_info = as_flag(return_info, "return_info")
     n = lap.n
-    parts = {k: [] for k in ("rows", "cols", "vals", "errs")}
+    parts = {k: [None] * n for k in ("rows", "vals", "errs")}
     per = {k: np.zeros(n) for k in ("dropped_max", "dropped_mass", "m_lost", "bnorm_error", "region")}
     ctx = _context(lap, t, threshold, tol)
     products = 0.0
@@ -425,10 +426,9 @@ def _keep(ctx, R, source, u, e, lost, min_mass, parts, per):
         raise ValueError(f"t = {ctx['t']:g}: column {source} keeps {rows.size} of the {n} entries (more "
                          f"than {MAX_FRACTION:g}) at threshold {threshold:g}; the heat kernel is not sparse "
                          "there: ask sig.heat_kernel for the columns needed, or raise the threshold")
-    parts["rows"].append(rows.astype(np.int32))
-    parts["cols"].append(np.full(rows.size, source, dtype=np.int32))
-    parts["vals"].append(u[keep])
-    parts["errs"].append((e[keep] + lost / mass[rows]) * (1.0 + 4.0 * U))
+    parts["rows"][source] = rows.astype(np.int32)
+    parts["vals"][source] = u[keep]
+    parts["errs"][source] = _up32((e[keep] + lost / mass[rows]) * (1.0 + 4.0 * U))
     top = u[~keep] + e[~keep]
     cut = float(np.max(top, initial=0.0))
     per["dropped_max"][source] = (cut + lost / min_mass) * (1.0 + 4.0 * U)
@@ -437,30 +437,30 @@ def _keep(ctx, R, source, u, e, lost, min_mass, parts, per):
     per["m_lost"][source] = lost
 
 
+def _up32(x):
+    """float32 copy of non-negative x rounded upward (a bound stays a bound in half the memory)."""
+    y = x.astype(np.float32)
+    return np.nextafter(y, np.float32(np.inf), out=y, where=y < x)
+
+
 def _symmetric(n, parts):
-    """(K, E) = ((C + C^T) / N, (E_C + E_C^T) / N) from the stored columns (notes of
-    :func:`sparse_heat_kernel`); the division's rounding added to E.
+    """(K, E) = (max(C, C^T), max(E_C, E_C^T)) from the stored columns (notes of
+    :func:`sparse_heat_kernel`).
 
-    Each part is one column with sorted rows, so C is assembled in compressed columns without
-    sorting, and its transpose is the same arrays read by rows."""
-    order = np.argsort([c[0] if c.size else -1 for c in parts["cols"]], kind="stable")
-    counts = np.zeros(n + 1, dtype=np.int64)
-    for i in order:
-        if parts["cols"][i].size:
-            counts[parts["cols"][i][0] + 1] = parts["cols"][i].size
-    indptr = np.cumsum(counts)
-    rows = np.concatenate([parts["rows"][i] for i in order])
-    # where each stored entry of C lands in its compressed rows: C's data read by rows
-    index = sp.csc_matrix((np.arange(rows.size, dtype=float), rows, indptr), shape=(n, n)).tocsr()
-    perm = index.data.astype(np.int64)
+    Column j of C is ``parts[...][j]`` with sorted rows, so C is assembled in compressed
+    columns without sorting, and its transpose is the same arrays read by rows; each list is
+    emptied as it is read."""
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum([r.size for r in parts["rows"]], out=indptr[1:])
+    rows = np.concatenate(parts["rows"])
+    parts["rows"].clear()
 
-    def both(data):
-        by_rows = sp.csr_matrix((data[perm], index.indices, index.indptr), shape=(n, n))
-        return by_rows + sp.csr_matrix((data, rows, indptr), shape=(n, n))   # C + C^T
+    def one(key):
+        data = np.concatenate(parts[key])
+        parts[key].clear()
+        C = sp.csc_matrix((data, rows, indptr), shape=(n, n))
+        return C.tocsr().maximum(sp.csr_matrix((data, rows, indptr), shape=(n, n)))
 
-    count = both(np.ones(rows.size))
-    K = both(np.concatenate([parts["vals"][i] for i in order]))
-    K.data /= count.data
-    E = both(np.concatenate([parts["errs"][i] for i in order]))
-    E.data = E.data / count.data * (1.0 + 4.0 * U) + 2.0 * U * K.data
+    K = one("vals")
+    E = one("errs")
     return K, E

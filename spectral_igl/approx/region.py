@@ -159,6 +159,16 @@ def patches(L, size: int):
     -------
     list of (k,) int arrays
         Every vertex in exactly one patch, each patch within one connected component.
+
+    Examples
+    --------
+    >>> import numpy as np, spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.approx.region import patches
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> parts = patches(lap.L, 64)
+    >>> bool(np.array_equal(np.sort(np.concatenate(parts)), np.arange(lap.n))), max(p.size for p in parts)
+    (True, 64)
     """
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
@@ -210,6 +220,22 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float, mass=None
         :math:`e_j + m/B_{jj}` of u at every vertex j of the source's component.
     products : int
         Sparse products taken on R (per block).
+
+    Notes
+    -----
+    Module notes: :math:`u - e \le K^R_t \le K_t` on R, and the heat kept in R, summed from
+    :math:`(u - e)^+` with its rounding, bounds the heat outside from above.
+
+    Examples
+    --------
+    >>> import numpy as np, spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.approx.region import dirichlet_heat
+    >>> lap = sig.laplacian(*icosphere(3))
+    >>> R = np.arange(lap.n)                      # the whole sphere: nothing leaves it
+    >>> u, e, lost, k = dirichlet_heat(lap, 1e-2, R, [0, 5], 1e-14)
+    >>> u.shape, bool(np.all(lost < 1e-10))
+    ((642, 2), True)
     """
     sources = np.asarray(sources, dtype=np.int64).reshape(-1)
     mass = (lap.mass if mass is None else mass)[R]
@@ -267,6 +293,26 @@ def region_heat_column(lap, t: float, source: int, tol: float, budget: float = B
         ``bound_kind`` ``"proof"``, ``method`` ``"local"``, ``bnorm_error``, ``tol``,
         ``region``, ``m_lost``, ``products``, ``solver_error``, ``cost`` (products of the whole
         operator spent); when declined only ``note`` (why) and ``cost``.
+
+    Notes
+    -----
+    The region starts at :func:`first_radius` and grows by the Gaussian tail's law
+    (:math:`\log(1/m)` like the squared radius) until the bound of the module notes meets
+    ``tol``; each attempt's cost is predicted before it runs (the Poisson terms at the region's
+    rate times its share of the stored entries of L), so a declined column costs at most
+    ``budget`` products.
+
+    Examples
+    --------
+    >>> import spectral_igl as sig
+    >>> from spectral_igl.data_generators import icosphere
+    >>> from spectral_igl.approx.region import region_heat_column
+    >>> lap = sig.laplacian(*icosphere(4))
+    >>> k, info = region_heat_column(lap, 1e-3, 0, 1e-8)
+    >>> info["method"], info["region"] < lap.n // 4, bool(info["bnorm_error"] <= 1e-8 / lap.mass[0] ** 0.5)
+    ('local', True, True)
+    >>> region_heat_column(lap, 1.0, 0, 1e-8)[0] is None
+    True
     """
     n, mass, L = lap.n, lap.mass, lap.L
     comp = lap.components == lap.components[source]
