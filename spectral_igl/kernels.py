@@ -22,7 +22,7 @@ from ._validate import as_delta, as_flag, as_index, as_indices, as_tol, check_de
 from .approx import spectral_operator
 from .approx.region import region_heat_column
 from .approx.uniformization import metzler_heat, products_needed
-from .diagonal import EXACT_MAX
+from .diagonal import EXACT_MAX as DENSE_LIMIT
 from .families import heat_columns
 from .filters import check_filter, heat
 from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, shape_time
@@ -298,6 +298,14 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     so is the returned one. See :func:`spectral_kernel` for the parameters; returns (n,) for one
     source, (n, m) for m sources.
 
+    With ``method="auto"`` (and no ``rtol``) on a Metzler operator of more than
+    :data:`LOCAL_MIN_VERTICES` vertices, each column is first solved on a region around its
+    source (:func:`~spectral_igl.local_heat_kernel`: at small t a small fraction of one
+    factorization, with the same proved per-entry bound); ``info["method"]`` is then
+    ``"local"``. When a region would cost too much the global path is taken, after at most
+    :data:`~spectral_igl.approx.region.BUDGET` products of the whole operator, and
+    ``info["note"]`` says why.
+
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
@@ -348,7 +356,7 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
 #: above this many vertices ``method="auto"`` heat columns of a Metzler operator are first tried
 #: on a region around their source (:mod:`spectral_igl.approx.region`); below it the global
 #: path costs little
-LOCAL_MIN_VERTICES = EXACT_MAX
+LOCAL_MIN_VERTICES = DENSE_LIMIT
 
 
 def _local_columns(lap, t, idx, tol):
@@ -381,6 +389,7 @@ def block_sources(lap, method, delta, m) -> bool:
     """Whether m heat columns go through one factorization per pole with all sources as one
     block: from :data:`MANY_SOURCES` sources on, above the dense limit (where factorizations,
     not solves, dominate the cost of the Krylov path)."""
+    from .diagonal import EXACT_MAX
     from .linalg import ldlt
 
     return (method == "auto" and delta == "mass" and m >= MANY_SOURCES and lap.n > EXACT_MAX

@@ -37,6 +37,10 @@ values minus e, with the rounding of its sum and of :math:`e^{\rho t}` accounted
 returned entry is within ``abs_error`` = :math:`e_j + m/B_{jj}` of the exact kernel (a proof),
 and below it up to :math:`e_j`: :math:`\tilde K_j - e_j \le K_t(j, s)`.
 
+:func:`local_mexican_hat` is one sparse product of such a column, and
+:func:`sparse_heat_kernel` the whole matrix :math:`K_t` by patches of sources sharing one
+region, thresholded with proved bounds of what it drops.
+
 R is the set of vertices within a distance r of the source, measured along edges of L with the
 length :math:`\sqrt{2(B_{ii}/L_{ii} + B_{jj}/L_{jj})}` (the edge length of an equilateral
 mesh), starting from :math:`r = \sqrt{4t\log(1/m_\text{goal})}` (a Gaussian's tail) and
