@@ -269,7 +269,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     r"""The whole heat kernel matrix :math:`K_t = e^{-t\tilde L}B^{-1}` as a certified sparse matrix.
 
     Every column :math:`K_t(:, s)` is solved on a region around its source, as by
-    :func:`local_heat_kernel`, by blocks of :data:`block` neighbouring sources that share one
+    :func:`local_heat_kernel`, by blocks of ``block`` neighbouring sources that share one
     region and one block of sparse products; every entry at or above ``threshold`` times its
     column's peak is kept, and what is dropped is bounded, entry by entry and in mass.
 
