@@ -20,13 +20,15 @@ from .accuracy import info as make_info
 from .accuracy import AccuracyWarning, relative_error, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_tol, check_dense_size
 from .approx import spectral_operator
+from .approx.region import region_heat_column
 from .approx.uniformization import metzler_heat, products_needed
+from .diagonal import EXACT_MAX as DENSE_LIMIT
 from .families import heat_columns
 from .filters import check_filter, heat
 from .laplacian import Laplacian, as_laplacian, entry_error, lambda_max_kind, mass_ratio, shape_time
 
 __all__ = ["spectral_kernel", "heat_kernel", "heat_kernels", "kernel_columns", "source_indices", "BLOCK",
-           "block_sources", "MANY_SOURCES"]
+           "block_sources", "MANY_SOURCES", "LOCAL_MIN_VERTICES"]
 
 #: columns per engine call; bounds the (n, block) work arrays
 BLOCK = 64
@@ -328,6 +330,14 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
 
     The discrete heat kernel of the survey's §5.3, computed as in §5.5.
 
+    With ``method="auto"`` (and no ``rtol``) on a Metzler operator of more than
+    :data:`LOCAL_MIN_VERTICES` vertices, each column is first solved on a region around its
+    source (:func:`~spectral_igl.local_heat_kernel`: at small t a small fraction of one
+    factorization, with the same proved per-entry bound); ``info["method"]`` is then
+    ``"local"``. When a region would cost too much the global path is taken, after at most
+    :data:`~spectral_igl.approx.region.BUDGET` products of the whole operator, and
+    ``info["note"]`` says why.
+
     Examples
     --------
     >>> import numpy as np, spectral_igl as sig
@@ -344,6 +354,18 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
     t = shape_time(lap, t, time_unit)
     delta = as_delta(delta)
     idx, scalar = source_indices(sources, lap.n)
+    tried = None
+    if rtol is None and method == "auto" and delta == "mass" and lap.is_metzler and lap.n > LOCAL_MIN_VERTICES:
+        K, info = _local_columns(lap, float(t), idx, as_tol(tol))
+        if K is not None:
+            info["time"] = t
+            if scalar:
+                K = K[:, 0]
+                info = {k: (v[:, 0] if isinstance(v, np.ndarray) and v.ndim == 2 else
+                            (v[0].item() if isinstance(v, np.ndarray) and v.ndim == 1 else v))
+                        for k, v in info.items()}
+            return (K, info) if as_flag(return_info, "return_info") else K
+        tried = info
     if rtol is None and block_sources(lap, method, delta, idx.size):
         lap.warn_if_not_metzler("heat kernel")
         K, info = heat_kernels(lap, [t], idx, tol=tol, return_info=True)
@@ -352,11 +374,40 @@ def heat_kernel(lap: Laplacian, t: float, sources, delta: str = "mass", method: 
                                    (float(v[0]) if isinstance(v, np.ndarray) and v.shape == (1,) else v))
                                for k, v in info.items()}
         info["time"] = t
+        if tried is not None:
+            info["note"] = tried["note"]
         return (K, info) if as_flag(return_info, "return_info") else K
     out = _kernel(lap, heat(t), sources, delta, method, tol, return_info, rtol, floor)
     if isinstance(out, tuple):
         out[1]["time"] = t
+        if tried is not None:
+            out[1]["note"] = tried["note"]
     return out
+
+
+#: above this many vertices ``method="auto"`` heat columns of a Metzler operator are first tried
+#: on a region around their source (:mod:`spectral_igl.approx.region`); below it the global
+#: path costs little
+LOCAL_MIN_VERTICES = DENSE_LIMIT
+
+
+def _local_columns(lap, t, idx, tol):
+    """(n, m) heat columns each on a region around its source, with their ``info``, or
+    (None, {"note": why}) at the first column whose region would cost too much (that attempt
+    costs at most :data:`~spectral_igl.approx.region.BUDGET` products of the whole operator)."""
+    K = np.zeros((lap.n, idx.size))
+    parts = []
+    for c, s in enumerate(idx):
+        col, info = region_heat_column(lap, t, int(s), tol)
+        if col is None:
+            info["note"] = "local column declined: " + info["note"]
+            return None, info
+        K[:, c] = col
+        parts.append(info)
+    stack = {k: np.stack([p[k] for p in parts], axis=-1) for k in ("abs_error", "solver_error")}
+    flat = {k: np.array([p[k] for p in parts]) for k in ("bnorm_error", "region", "m_lost", "products", "cost")}
+    warn_missed("heat_kernel", flat["bnorm_error"], tol / np.sqrt(lap.mass[idx]), stacklevel=4)
+    return K, make_info(stack["abs_error"], "proof", "local", tol=tol, solver_error=stack["solver_error"], **flat)
 
 
 for _fn in (spectral_kernel, heat_kernel):

@@ -108,3 +108,117 @@ def test_bad_source():
     lap, _, _ = _exact("icosphere")
     with pytest.raises(ValueError, match="source"):
         sig.local_heat_kernel(lap, 1e-3, lap.n)
+
+
+@pytest.mark.parametrize("name, sources, t", [("grid", 300, 1e-5), ("two", [5, 650], 2e-4),
+                                              ("icosphere", [7, 100], 5e-5)])
+def test_auto_heat_kernel_takes_the_local_path(monkeypatch, name, sources, t):
+    monkeypatch.setattr(sig.kernels, "LOCAL_MIN_VERTICES", 0)
+    lap, w, X = _exact(name)
+    k, info = sig.heat_kernel(lap, t, sources, return_info=True)
+    exact = (X * np.exp(-t * w)) @ X[sources].T
+    assert info["method"] == "local" and info["bound_kind"] == "proof" and k.shape == exact.shape
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+    target = 1e-8 / np.sqrt(lap.mass[sources])
+    assert np.all(info["bnorm_error"] <= target)
+    # the same column as the explicit call
+    first = np.atleast_1d(sources)[0]
+    k0 = k if k.ndim == 1 else k[:, 0]
+    assert np.array_equal(k0, sig.local_heat_kernel(lap, t, first))
+
+
+def test_auto_heat_kernel_declines_large_regions(monkeypatch):
+    monkeypatch.setattr(sig.kernels, "LOCAL_MIN_VERTICES", 0)
+    lap, w, X = _exact("icosphere")
+    k, info = sig.heat_kernel(lap, 0.05, 3, return_info=True)
+    exact = X @ (np.exp(-0.05 * w) * X[3])
+    assert info["method"] == "rational" and info["note"].startswith("local column declined")
+    assert np.all(np.abs(k - exact) <= info["abs_error"] + REFERENCE * exact.max())
+
+
+def test_auto_local_above_the_threshold():
+    """Above LOCAL_MIN_VERTICES without any patch, against the global path's own proof."""
+    V, F = icosphere(5)
+    lap = sig.laplacian(V, F)
+    lap = sig.laplacian(V / np.sqrt(lap.area()), F)
+    assert lap.n > sig.kernels.LOCAL_MIN_VERTICES
+    k, info = sig.heat_kernel(lap, 1e-5, 11, return_info=True)
+    ref, rinfo = sig.heat_kernel(lap, 1e-5, 11, method="rational", tol=1e-10, return_info=True)
+    assert info["method"] == "local" and info["region"] < lap.n // 20
+    assert np.all(np.abs(k - ref) <= info["abs_error"] + rinfo["abs_error"])
+    assert info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass[11])
+
+
+@pytest.mark.parametrize("name, source", [("grid", 0), ("grid", 300), ("two", 5), ("icosphere", 7)])
+@pytest.mark.parametrize("t", [1e-5, 1e-4])
+def test_local_mexican_hat_within_its_proved_bound(name, source, t):
+    lap, w, X = _exact(name)
+    exact = X @ (t * w * np.exp(-t * w) * X[source])
+    h, info = sig.local_mexican_hat(lap, t, source, return_info=True)
+    assert info["method"] == "local" and info["bound_kind"] == "proof"
+    scale = np.abs(exact).max()
+    assert np.all(np.abs(h - exact) <= info["abs_error"] + REFERENCE * scale * max(1.0, t * w.max()))
+    assert info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass[source])
+    # sparse: zero beyond one ring of the heat column's region
+    assert np.count_nonzero(h) < lap.n // 2
+    # the bound is not vacuous: the column's B-norm error is within 1e4 of it or far below tol
+    diff = h - exact
+    assert np.sqrt(diff @ (lap.mass * diff)) * 1e4 >= info["bnorm_error"] or \
+        info["bnorm_error"] < 1e-2 * 1e-8 / np.sqrt(lap.mass[source])
+
+
+def test_local_mexican_hat_falls_back_at_large_t():
+    lap, w, X = _exact("icosphere")
+    h, info = sig.local_mexican_hat(lap, 0.05, 3, return_info=True)
+    exact = X @ (0.05 * w * np.exp(-0.05 * w) * X[3])
+    assert info["method"].startswith("global") and "region" in info["note"]
+    assert np.all(np.abs(h - exact) <= info["abs_error"] + REFERENCE * np.abs(exact).max())
+
+
+@pytest.mark.parametrize("name", ["grid", "two", "icosphere"])
+@pytest.mark.parametrize("t, threshold, block", [(1e-5, 1e-8, 64), (1e-4, 1e-6, 16), (2e-4, 1e-10, 7)])
+def test_sparse_heat_kernel_every_entry_and_dropped_mass(name, t, threshold, block):
+    lap, w, X = _exact(name)
+    exact = (X * np.exp(-t * w)) @ X.T          # k_t(x_i, x_j), symmetric for the lumped mass
+    K, info = sig.sparse_heat_kernel(lap, t, threshold=threshold, block=block, return_info=True)
+    assert info["bound_kind"] == "proof" and info["method"] == "local"
+    assert abs(K - K.T).max() == 0 and K.min() >= 0
+    Kd, E = K.toarray(), info["abs_error"].toarray()
+    stored = Kd > 0
+    assert np.array_equal(stored, E > 0)
+    peak = exact.max(axis=0)
+    slack = REFERENCE * peak[None, :]
+    # every stored entry within its bound, every dropped one within dropped_max of its column
+    assert np.all((np.abs(Kd - exact) <= E + slack)[stored])
+    assert np.all((exact <= info["dropped_max"][None, :] + slack)[~stored])
+    # each column's dropped mass within its bound
+    assert np.all(lap.mass @ np.where(stored, 0.0, exact) <= info["dropped_mass"] + REFERENCE)
+    # everything at or above the threshold of its column's peak is stored (up to the bounds)
+    assert np.all(stored[exact > threshold * peak[None, :] * (1 + 1e-6) + 2 * E.max(axis=0)[None, :]])
+    # the matrix is sparse, and its columns keep the B-norm promise of the global path
+    assert K.nnz < lap.n ** 2 // 4
+    assert np.all(info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass))
+    # the bounds are not vacuous: the dropped mass bound within 1e3 of the truth, or below 1e-9
+    true_dropped = lap.mass @ np.where(stored, 0.0, exact)
+    assert np.all((info["dropped_mass"] <= 1e3 * true_dropped) | (info["dropped_mass"] < 1e-9))
+
+
+def test_sparse_heat_kernel_diagonal_is_the_hks():
+    lap, w, X = _exact("grid")
+    t = 1e-4
+    K, info = sig.sparse_heat_kernel(lap, t, return_info=True)
+    hks = (X * X) @ np.exp(-t * w)
+    assert np.all(np.abs(K.diagonal() - hks) <= info["abs_error"].diagonal() + REFERENCE * hks)
+
+
+def test_sparse_heat_kernel_refuses_dense_and_bad_arguments():
+    lap, _, _ = _exact("icosphere")
+    with pytest.raises(ValueError, match="not sparse"):
+        sig.sparse_heat_kernel(lap, 0.05)
+    with pytest.raises(ValueError, match="threshold"):
+        sig.sparse_heat_kernel(lap, 1e-5, threshold=1.5)
+    with pytest.raises(ValueError, match="block"):
+        sig.sparse_heat_kernel(lap, 1e-5, block=0)
+    V, F = icosphere(2)
+    with pytest.raises(ValueError, match="positive=True"):
+        sig.sparse_heat_kernel(sig.laplacian(V, F, mass="full"), 1e-3)
