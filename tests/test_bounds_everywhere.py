@@ -357,12 +357,13 @@ def test_store_round_trips_the_bound(tmp_path):
             "distances": Job.distances([0, 5], "commute_time"), "eigenvalues": Job.eigenvalues(4)}
     truths = {"hks": (X ** 2) @ np.exp(-np.outer(lam, [0.1, 1.0])),
               "diagonal": true_diagonal("sphere", F.heat(0.1)),
-              "distances": np.stack([true_distances("sphere", F.commute_time(), s) for s in (0, 5)])}
+              "distances": np.stack([true_distances("sphere", F.commute_time(), s) for s in (0, 5)]),
+              "eigenvalues": lam[:4]}
     for key, job in jobs.items():
         arrays, bounds = job("s", lap)
         assert process_shape(Shape(key, None, V, Fc), job, out, {})["status"] == "done"
         res = load(out).results[key]
-        kind = {"hks": "proof", "diagonal": "estimate", "distances": "proof", "eigenvalues": None}[key]
+        kind = {"hks": "proof", "diagonal": "estimate", "distances": "proof", "eigenvalues": "proof"}[key]
         assert res.bound_kind == bounds["bound_kind"] == kind
         assert res.meta["bounds"]["of"] == key
         np.testing.assert_array_equal(res.abs_error(key), arrays[key + "_abs_error"])

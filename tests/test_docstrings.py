@@ -80,12 +80,6 @@ def test_docstring_example(test, tmp_path, monkeypatch):
 
 API_RST = Path(__file__).resolve().parents[1] / "docs" / "api.rst"
 
-#: public names whose modules (spectral_igl/collection, applications/transport.py) are being
-#: rewritten together with their docstrings; each leaves this set, and then meets the same
-#: standard, as its sections land
-PENDING = {
-    "wasserstein_distance", "wasserstein_barycenter", "applications.sinkhorn",
-}
 
 
 def _api_rst_names() -> list[str]:
@@ -160,8 +154,6 @@ def _missing_sections(obj) -> list[str]:
 MATH_MODULES = ("spectral_igl.kernels", "spectral_igl.distances", "spectral_igl.descriptors",
                 "spectral_igl.embedding", "spectral_igl.diagonal", "spectral_igl.approx",
                 "spectral_igl.applications", "spectral_igl.linalg.eigen", "spectral_igl.laplacian.bounds")
-#: like PENDING, for the maths (applications/compare.py is being rewritten)
-MATH_PENDING = {"shape_distance_matrix"}
 
 
 def test_public_names_are_found():
@@ -173,16 +165,12 @@ def test_public_names_are_found():
                                          if v.__module__.startswith(MATH_MODULES)))
 def test_public_docstring_states_the_maths(name):
     doc = inspect.getdoc(PUBLIC[name]) or ""
-    if name in MATH_PENDING:
-        pytest.skip("pending")
     assert ":math:" in doc or ".. math::" in doc, f"spectral_igl.{name}: no formula in the docstring"
 
 
 @pytest.mark.parametrize("name", sorted(PUBLIC))
 def test_public_docstring_has_sections(name):
     missing = _missing_sections(PUBLIC[name])
-    if name in PENDING:
-        pytest.skip(f"pending: {missing}" if missing else "pending, now complete: empty it from PENDING")
     assert not missing, f"spectral_igl.{name}: the docstring has no {', '.join(missing)} section"
 
 

@@ -556,7 +556,16 @@ def map_error(V1, F1, p2p, truth, samples: int | None = 500, method: str = "exac
 
 @dataclass
 class Correspondence:
-    """The result of :func:`match_shapes`.
+    r"""The result of :func:`match_shapes`.
+
+    The point map :math:`T: M_2 \to M_1` and the functional maps, which carry the
+    coefficients of a function on the source in its eigenbasis to those of
+    :math:`f \circ T` in the target's: :math:`C \approx \Phi_2^\top B_2 \Pi \Phi_1`.
+
+    Parameters
+    ----------
+    p2p, C, C0, seconds
+        As the attributes.
 
     Attributes
     ----------
@@ -568,6 +577,13 @@ class Correspondence:
         The functional map fitted on the descriptors, before refinement.
     seconds : dict
         Time of each stage: ``"eigs"``, ``"descriptors"``, ``"fit"``, ``"zoomout"``.
+
+    Examples
+    --------
+    >>> import numpy as np, spectral_igl as sig
+    >>> res = sig.Correspondence(np.arange(3), np.eye(2), np.eye(2), {"eigs": 0.1})
+    >>> res.p2p.tolist(), res.C.shape
+    ([0, 1, 2], (2, 2))
     """
 
     p2p: np.ndarray
@@ -585,7 +601,15 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     Eigenpairs (:func:`spectral_igl.eigs`, ``k_final`` of each shape), descriptors
     (:func:`pair_descriptors`, plus :func:`landmark_descriptors` when landmarks are given), a
     ``k x k`` functional map (:func:`functional_map`), its point map and ZoomOut up to
-    ``k_final`` (:func:`zoomout`).
+    ``k_final`` (:func:`zoomout`), both shapes first scaled to unit area
+    (:func:`unit_measure`). The fit solves
+
+    .. math:: \min_C \|C A_1 - A_2\|^2 + \mu_L \|C\Lambda_1 - \Lambda_2 C\|^2
+              + \mu_D \sum_p \|C P_{1,p} - P_{2,p} C\|^2,
+
+    :math:`A_i = \Phi_i^\top B_i D_i` the descriptors' coefficients, :math:`\Lambda_i` the
+    eigenvalues, :math:`P_{i,p} = \Phi_i^\top B_i\,\mathrm{diag}(d_{i,p})\,\Phi_i` the
+    descriptors as multiplication operators.
 
     Parameters
     ----------

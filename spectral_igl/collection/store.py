@@ -638,6 +638,7 @@ def load(out, arrays: bool = True) -> Loaded:
         ``damaged: True`` and the problem in ``error``, never among the results; a rerun
         of :func:`~spectral_igl.collection.run` recomputes it. Groups left half-written by
         an interruption (under ``.partial``) are never listed.
+
     Examples
     --------
     >>> import numpy as np
