@@ -60,6 +60,34 @@ def test_first_steps_notebook_runs_and_shows_its_pictures(tmp_path, monkeypatch)
                for o in c.outputs) == 2
 
 
+@needs("nbclient", "nbformat", "ipykernel", "trame_pyvista")
+def test_the_interactive_backend_shows_a_widget(tmp_path, monkeypatch):
+    """With pyvista's interactive backend (trame, ``pip install "pyvista[jupyter]"``) the same
+    cell shows pyvista's widget instead of a PNG."""
+    import nbclient
+    import nbformat
+
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(
+        "import pyvista as pv\n"
+        "import spectral_igl as sig\n"
+        "from spectral_igl import viz\n"
+        "from spectral_igl.data_generators import icosphere\n"
+        "pv.set_jupyter_backend('trame')\n"
+        "V, F = icosphere(2)\n"
+        "k = sig.heat_kernel(sig.laplacian(V, F), 1e-2, 0)"),
+        nbformat.v4.new_code_cell("viz.plot_levelsets((V, F), k, window_size=(320, 240))")]
+    nbclient.NotebookClient(nb, timeout=300, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    out = nb.cells[1].outputs
+    assert not [o for o in out if o.output_type == "error"]
+    data = [o.get("data", {}) for o in out if o.output_type == "display_data"]
+    assert any("application/vnd.jupyter.widget-view+json" in d for d in data), data
+    assert not any("Plotter" in d.get("text/plain", "") for d in data)     # not the repr
+
+
 def test_a_written_picture_is_the_plotters_png(tmp_path):
     """With ``filename=`` the plotter is closed; it still shows the picture it wrote."""
     from PIL import Image
