@@ -17,7 +17,8 @@ PICKS = ["fig09_distances.png", "fig02_harmonic_6.png", "fig03_eigenfunction_10.
          "fig18_23_robustness.png", "fig24_smoothing.png", "fig15_truncated_kernel.png",
          "fig15_gibbs.png", "fig13_error_vs_k.png", "fig07_17_time_vs_n.png",
          "fig16_accuracy_vs_time.png", "fig05_lcurve.png", "fig10_filters.png",
-         "fig_retrieval_matrix.png", "fig_retrieval_neighbours.png"]
+         "fig_retrieval_matrix.png", "fig_retrieval_neighbours.png", "fig_correspondence.png",
+         "fig_correspondence_error.png"]
 MAX_BYTES = 150_000
 
 
