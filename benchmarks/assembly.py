@@ -3,6 +3,7 @@
     python benchmarks/assembly.py --quick        # n ≈ 10k only
     python benchmarks/assembly.py                # n ≈ 10k, 160k, 655k (icosphere levels 5, 7, 8)
     python benchmarks/assembly.py --levels 5 6 7 8
+    python benchmarks/assembly.py --levels 5 7 --json-dir docs/results   # also docs/results/assembly.json
 
 Run it with the installed package (``pip install -e .``) to time the compiled kernels;
 the first line of the output says which kernels were used.
@@ -21,6 +22,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from _results import Table  # beside this script
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -83,6 +85,7 @@ def main(argv=None):
     ap.add_argument("--levels", type=int, nargs="*", default=None, help="icosphere levels (n = 10·4^l + 2)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--skip", nargs="*", default=[], help="skip constructors whose name contains any of these")
+    ap.add_argument("--json-dir", help="also write the table as assembly.json in this folder (docs/results)")
     a = ap.parse_args(argv)
     levels = a.levels or ([5] if a.quick else [5, 7, 8])
     warnings.simplefilter("ignore")
@@ -92,12 +95,12 @@ def main(argv=None):
     except ImportError:
         compiled = "NumPy reference kernels (no spectral_igl.laplacian._assembly build)"
     print(f"{compiled}; numpy {np.__version__}\n")
-    print("| n | constructor | rows | nnz(L) | seconds | ns / nnz | × cotmatrix per nnz |")
-    print("|---|---|---|---|---|---|---|")
+    table = Table("assembly", ["n", "constructor", "rows", "nnz(L)", "seconds", "ns / nnz", "× cotmatrix per nnz"],
+                  a.json_dir)
     for level in levels:
         for lvl, name, size, nnz, t, ns, ratio in rows_for_level(level, 1 if level >= 8 else a.repeat, a.skip):
-            print(f"| {10 * 4 ** lvl + 2:,} | {name} | {size:,} | {nnz:,} | {t:.3f} | {ns:.1f} | {ratio:.2f} |",
-                  flush=True)
+            table.add(f"{10 * 4 ** lvl + 2:,}", name, f"{size:,}", f"{nnz:,}", f"{t:.3f}", f"{ns:.1f}", f"{ratio:.2f}")
+    table.close()
 
 
 if __name__ == "__main__":
