@@ -125,7 +125,7 @@ def surface_spectrum(V, F, k=20, target=40_000):
 
 
 def percent(x):
-    return f"{100 * x:.3g}%"
+    return f"{100 * x:#.3g}%"
 
 
 def shapes(names, methods, json_dir=None):
