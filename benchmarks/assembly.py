@@ -3,6 +3,7 @@
     python benchmarks/assembly.py --quick        # n ≈ 10k only
     python benchmarks/assembly.py                # n ≈ 10k, 160k, 655k (icosphere levels 5, 7, 8)
     python benchmarks/assembly.py --levels 5 6 7 8
+    python benchmarks/assembly.py --levels 5 7 --json-dir docs/results   # also docs/results/assembly.json
 
 Run it with the installed package (``pip install -e .``) to time the compiled kernels;
 the first line of the output says which kernels were used.
@@ -21,6 +22,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from _results import Table  # beside this script
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -48,7 +50,8 @@ def rows_for_level(level, repeat, skip):
     E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
     cases = [
         ("igl.cotmatrix", lambda: igl.cotmatrix(V, F)),
-        ("laplacian (cotan, full mass)", lambda: sig.laplacian(V, F)),
+        ("laplacian (defaults: intrinsic Delaunay cotan, lumped mass)", lambda: sig.laplacian(V, F)),
+        ("laplacian (cotan, full mass)", lambda: sig.laplacian(V, F, weights="cotan", mass="full")),
         ("anisotropic_laplacian", lambda: sig.anisotropic_laplacian(V, F, 1.0)),
         ("point_cloud_laplacian belkin", lambda: sig.point_cloud_laplacian(P, method="belkin")),
         ("point_cloud_laplacian liu", lambda: sig.point_cloud_laplacian(P, method="liu")),
@@ -67,7 +70,11 @@ def rows_for_level(level, repeat, skip):
     for name, fn in cases:
         if any(s in name for s in skip):
             continue
-        t, out = best(fn, repeat)
+        try:
+            t, out = best(fn, repeat)
+        except ValueError as exc:          # e.g. beyond the memory budget: say so in the row
+            rows.append((level, name, None, None, None, None, f"refused: {str(exc).split(';')[0]}"))
+            continue
         L = out.L if isinstance(out, sig.Laplacian) else out[0] if isinstance(out, tuple) else out
         nnz = L.nnz
         per = t / nnz
@@ -83,21 +90,26 @@ def main(argv=None):
     ap.add_argument("--levels", type=int, nargs="*", default=None, help="icosphere levels (n = 10·4^l + 2)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--skip", nargs="*", default=[], help="skip constructors whose name contains any of these")
+    ap.add_argument("--json-dir", help="also write the table as assembly.json in this folder (docs/results)")
     a = ap.parse_args(argv)
     levels = a.levels or ([5] if a.quick else [5, 7, 8])
     warnings.simplefilter("ignore")
     try:
-        from spectral_igl import _assembly  # noqa: F401
+        from spectral_igl.laplacian import _assembly  # noqa: F401
         compiled = "compiled kernels (spectral_igl.laplacian._assembly)"
     except ImportError:
         compiled = "NumPy reference kernels (no spectral_igl.laplacian._assembly build)"
     print(f"{compiled}; numpy {np.__version__}\n")
-    print("| n | constructor | rows | nnz(L) | seconds | ns / nnz | × cotmatrix per nnz |")
-    print("|---|---|---|---|---|---|---|")
+    table = Table("assembly", ["n", "constructor", "rows", "nnz(L)", "seconds", "ns / nnz", "× cotmatrix per nnz"],
+                  a.json_dir)
     for level in levels:
         for lvl, name, size, nnz, t, ns, ratio in rows_for_level(level, 1 if level >= 8 else a.repeat, a.skip):
-            print(f"| {10 * 4 ** lvl + 2:,} | {name} | {size:,} | {nnz:,} | {t:.3f} | {ns:.1f} | {ratio:.2f} |",
-                  flush=True)
+            if size is None:
+                table.add(f"{10 * 4 ** lvl + 2:,}", name, "", "", "", "", ratio)
+            else:
+                table.add(f"{10 * 4 ** lvl + 2:,}", name, f"{size:,}", f"{nnz:,}", f"{t:.3f}", f"{ns:.1f}",
+                          f"{ratio:.2f}")
+    table.close()
 
 
 if __name__ == "__main__":

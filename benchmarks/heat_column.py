@@ -11,6 +11,7 @@ Usage::
     python benchmarks/heat_column.py                      # spheres 10k, 40k, 160k + armadillo
     python benchmarks/heat_column.py --quick              # sphere 10k only, three times
     python benchmarks/heat_column.py --sizes 10k 40k 160k 650k --mesh ../shared/data/meshes/armadillo.obj
+    python benchmarks/heat_column.py --quick --json-dir docs/results   # also docs/results/heat_column.json
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import Table  # beside this script
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -48,7 +50,7 @@ def timed(fn, repeat=1):
     return best, out
 
 
-def run_shape(name, lap, times, args):
+def run_shape(name, lap, times, args, table):
     rows = []
     n = lap.n
     i = int(np.argmax(lap.data["V"][:, 2])) if "V" in lap.data else 0
@@ -97,34 +99,35 @@ def run_shape(name, lap, times, args):
             except Exception as exc:  # pragma: no cover - reported, not fatal
                 row["expm"] = (np.nan, f"{type(exc).__name__}: {exc}"[:60])
         rows.append(row)
-        print_row(row, eig.keys(), flush=True)
+        table.add(*cells(row, eig_ks(args)))
     return rows
 
 
-HEADER_DONE = []
+def eig_ks(args):
+    """The eigsh truncations the table has a column for."""
+    return [] if args.no_eigsh else list(args.eigsh_k)
 
 
-def print_row(r, ks, flush=False):
-    ks = list(ks)
-    if not HEADER_DONE:
-        cols = ["shape", "n", "t", "Cholesky (s)", "auto (s)", "auto / Cholesky", "method", "solves",
-                "auto rel. error", "certified bound"]
-        cols += [f"eigsh k={k}: time / error" for k in ks] + ["expm_multiply: time / error"]
-        print("| " + " | ".join(cols) + " |")
-        print("|" + "---|" * len(cols))
-        HEADER_DONE.append(1)
-    cells = [r["shape"], f"{r['n']}", f"{r['t']:.0e}", f"{r['chol']:.3f}", f"{r['ours']:.3f}",
-             f"{r['ours'] / r['chol']:.2f}", r["method"], f"{r['solves']}", f"{r['err']:.1e}",
-             f"{r['bound']:.1e}"]
+def columns(ks):
+    """The table's header, with a column per eigsh truncation in ``ks``."""
+    return (["shape", "n", "t", "Cholesky (s)", "auto (s)", "auto / Cholesky", "method", "solves",
+             "auto rel. error", "certified bound"]
+            + [f"eigsh k={k}: time / error" for k in ks] + ["expm_multiply: time / error"])
+
+
+def cells(r, ks):
+    """One row of the table: a shape at one time."""
+    out = [r["shape"], f"{r['n']}", f"{r['t']:.0e}", f"{r['chol']:.3f}", f"{r['ours']:.3f}",
+           f"{r['ours'] / r['chol']:.2f}", r["method"], f"{r['solves']}", f"{r['err']:.1e}", f"{r['bound']:.1e}"]
     for k in ks:
         te, ee = r.get(f"eig{k}", (np.nan, np.nan))
-        cells.append(f"{te:.1f} s / {ee:.1e}")
+        out.append(f"{te:.1f} s / {ee:.1e}" if k < r["n"] else "-")
     if "expm" in r:
         te, ee = r["expm"]
-        cells.append(f"{te:.1f} s / {ee:.1e}" if not isinstance(ee, str) else ee)
+        out.append(f"{te:.1f} s / {ee:.1e}" if not isinstance(ee, str) else ee)
     else:
-        cells.append("-")
-    print("| " + " | ".join(cells) + " |", flush=flush)
+        out.append("-")
+    return out
 
 
 def main(argv=None):
@@ -140,6 +143,7 @@ def main(argv=None):
     p.add_argument("--expm-times", nargs="*", type=float, default=[1e-2])
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--quick", action="store_true")
+    p.add_argument("--json-dir", help="also write the table as heat_column.json in this folder (docs/results)")
     args = p.parse_args(argv)
     from data_generators import icosphere
 
@@ -163,9 +167,10 @@ def main(argv=None):
         shapes.append((Path(m).stem, load))
     print(f"backend: {solvers.available_backends()[0]}; tol 1e-8; time = wall clock (best of "
           f"{args.repeat}), errors relative in the B-norm\n", flush=True)
+    table = Table("heat_column", columns(eig_ks(args)), args.json_dir)
     for name, make in shapes:
-        lap = make()
-        run_shape(name, lap, args.times, args)
+        run_shape(name, make(), args.times, args, table)
+    table.close()
 
 
 if __name__ == "__main__":

@@ -8,6 +8,8 @@ inverse against solves with unit vectors at 8 vertices.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/ldlt.py --n 10000 100000
     OPENBLAS_NUM_THREADS=1 python benchmarks/ldlt.py --n --tets 35      # a 35^3-cell tet box (3D fill)
+    OPENBLAS_NUM_THREADS=1 python benchmarks/ldlt.py --n 10000 100000 --tets 35 --superlu-ordering COLAMD \
+        --json-dir docs/results
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import time
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from _results import Table  # beside this script
 
 import spectral_igl as sig
 from data_generators import box_tets, torus
@@ -39,8 +42,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, nargs="*", default=[10000, 100000], help="torus sizes")
     ap.add_argument("--tets", type=int, nargs="*", default=[], help="tet boxes with S^3 cells")
+    ap.add_argument("--superlu-ordering", default="MMD_AT_PLUS_A",
+                    choices=["MMD_AT_PLUS_A", "MMD_ATA", "COLAMD", "NATURAL"],
+                    help="SuperLU's column ordering (its time is part of SuperLU's)")
+    ap.add_argument("--json-dir", help="also write the table as ldlt.json in this folder (docs/results)")
     args = ap.parse_args()
-    rows = []
+    table = Table("ldlt", ["n", "stored L entries", "cholespy factor [s]", "ordering + analysis [s]",
+                           "LDLᵀ real [s] (÷ cholespy)", "selected inverse real [s]", "LDLᵀ complex [s]",
+                           "selected inverse complex [s]", f"SuperLU complex, {args.superlu_ordering} [s]",
+                           "complex residual", "selinv vs solves"], args.json_dir)
     shapes = [("torus", n) for n in args.n] + [("tets", s) for s in args.tets]
     for kind, size in shapes:
         lap = sig.laplacian(*(unit_torus(size) if kind == "torus" else box_tets((size, size, size))))
@@ -53,7 +63,7 @@ def main():
         d, t_d = timed(f.inverse_diagonal)
         fz, t_fz = timed(lambda: LDLT(Z, pat))
         dz, t_dz = timed(fz.inverse_diagonal)
-        lu, t_lu = timed(lambda: spla.splu(Z, permc_spec="MMD_AT_PLUS_A"))
+        lu, t_lu = timed(lambda: spla.splu(Z, permc_spec=args.superlu_ordering))
         rng = np.random.default_rng(0)
         b = rng.standard_normal(n)
         res = np.linalg.norm(Z @ fz.solve(b) - b) / np.linalg.norm(b)
@@ -61,19 +71,10 @@ def main():
         E = np.zeros((n, 8))
         E[idx, np.arange(8)] = 1.0
         sel = np.abs(dz[idx] - fz.solve(E)[idx, np.arange(8)]).max() / np.abs(dz[idx]).max()
-        rows.append([f"{n:,}" + (" (tets)" if kind == "tets" else ""), f"{pat.nnz_L:,}", f"{t_chol:.2f}", f"{t_pat:.2f}",
-                     f"{t_f:.2f} ({t_f / t_chol:.2f}x)", f"{t_d:.2f}", f"{t_fz:.2f}", f"{t_dz:.2f}",
-                     f"{t_lu:.2f} ({t_lu / t_fz:.0f}x ours)", f"{res:.1e}", f"{sel:.1e}"])
-        print(" | ".join(rows[-1]), flush=True)
-    head = ["n", "stored L entries", "cholespy factor [s]", "ordering + analysis [s]",
-            "LDLᵀ real [s] (÷ cholespy)", "selected inverse real [s]", "LDLᵀ complex [s]",
-            "selected inverse complex [s]", "SuperLU complex [s]", "complex residual",
-            "selinv vs solves"]
-    print()
-    print("| " + " | ".join(head) + " |")
-    print("|" + "---|" * len(head))
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+        table.add(f"{n:,}" + (" (tets)" if kind == "tets" else ""), f"{pat.nnz_L:,}", f"{t_chol:.2f}",
+                  f"{t_pat:.2f}", f"{t_f:.2f} ({t_f / t_chol:.2f}x)", f"{t_d:.2f}", f"{t_fz:.2f}", f"{t_dz:.2f}",
+                  f"{t_lu:.2f} ({t_lu / t_fz:.0f}x ours)", f"{res:.1e}", f"{sel:.1e}")
+    table.close()
 
 
 if __name__ == "__main__":

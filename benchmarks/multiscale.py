@@ -9,6 +9,8 @@ engine tolerance 1e-12).
     OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --mesh ../shared/data/meshes/armadillo.obj
     OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --torus 40000 --tasks hks,wks
     OPENBLAS_NUM_THREADS=1 python benchmarks/multiscale.py --box 200000 --tasks columns,onetoall --m 1
+
+With ``--json-dir DIR`` the table is also written to ``DIR/<--table>.json`` (docs/results).
 """
 from __future__ import annotations
 
@@ -21,6 +23,7 @@ import sys
 import time
 
 import numpy as np
+from _results import Table  # beside this script
 
 TASKS = ("hks", "hks_loop3", "wks", "eigsh", "columns", "columns_times", "pairwise", "onetoall")
 
@@ -149,6 +152,21 @@ def run_task(args):
     print("RESULT " + json.dumps(out), flush=True)
 
 
+COLUMNS = ["task", "n", "Cholesky (s)", "time ÷ Cholesky", "factorizations", "max rel. error at the checks",
+           "certified bound (relative)", "peak (GB)", "factor cache (GB)"]
+
+
+def cells(r):
+    """One table row from a task's result."""
+    def sci(key):
+        return "—" if r.get(key) is None else f"{r[key]:.1e}"
+
+    task = r["task"] + (f" {r['filter']}" if "filter" in r else "")
+    bound = sci("eps") if "eps" in r else sci("bound_rel")
+    return [task, f"{r['n']:,}", f"{r['chol']:.2f}", f"{r['ratio']:.1f}", str(r.get("factorizations", "—")),
+            sci("err"), bound, f"{r['peak_gb']:.2f}", f"{r['cache_gb']:.2f}"]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh")
@@ -168,16 +186,18 @@ def main():
     ap.add_argument("--filter", default="diffusion")
     ap.add_argument("--factor-budget", type=float, default=None,
                     help="byte budget (GiB) of the cached factorizations (default: 25%% of available memory)")
+    ap.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
+    ap.add_argument("--table", default="multiscale", help="the table's name (its JSON file's stem)")
     args = ap.parse_args()
     if args.task:
         return run_task(args)
     base, skip = [], False
     for a in sys.argv[1:]:
-        if skip or a.startswith("--tasks"):
-            skip = a == "--tasks"
+        if skip or a.startswith(("--tasks", "--json-dir", "--table")):
+            skip = a in ("--tasks", "--json-dir", "--table")
             continue
         base.append(a)
-    rows = []
+    table = Table(args.table, COLUMNS, args.json_dir)
     for task in args.tasks.split(","):
         variants = [["--filter", "diffusion"], ["--filter", "biharmonic"]] if task == "onetoall" else [[]]
         for extra in variants:
@@ -187,9 +207,8 @@ def main():
             if not line:
                 print(f"{task}: failed\n{res.stderr[-2000:]}", flush=True)
                 continue
-            r = json.loads(line[0][7:])
-            rows.append(r)
-            print(json.dumps(r), flush=True)
+            table.add(*cells(json.loads(line[0][7:])))
+    table.close()
 
 
 if __name__ == "__main__":

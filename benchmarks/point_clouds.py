@@ -18,6 +18,7 @@ Usage::
 
     python benchmarks/point_clouds.py                 # 4k and 16k points, real shapes, 134k heat
     python benchmarks/point_clouds.py --quick         # 2k and 8k, two shapes, no heat timing
+    python benchmarks/point_clouds.py --sections shapes --json-dir docs/results   # docs/results/point_clouds.json
 """
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from _results import Table  # beside this script
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -122,10 +124,16 @@ def surface_spectrum(V, F, k=20, target=40_000):
     return ref, gap, n, c
 
 
-def shapes(names, methods):
+def percent(x):
+    return f"{100 * x:#.3g}%"
+
+
+def shapes(names, methods, json_dir=None):
     print("## vertices of real shapes: median rel. error of the first 20 nonzero eigenvalues against "
           "the spectrum of the mesh's surface (FEM on the mesh midpoint-subdivided to >= 40k "
           "vertices: ref n, its full-lumped gap); 'mesh' is full-mass FEM on the mesh itself")
+    table = Table("point_clouds", ["shape", "vertices", "reference n", "reference full/lumped gap",
+                                   "mesh (FEM)", *methods], json_dir)
     for name in names:
         path = MESHES / name
         if not path.is_file():
@@ -139,13 +147,13 @@ def shapes(names, methods):
             V = V / np.sqrt(sig.laplacian(V, F).area())
             own = sig.laplacian(V, F, weights="cotan", mass="full")
         ref, gap, nr, c = surface_spectrum(V, F)
-        cells = [f"ref n {nr} gap {gap:.4f}",
-                 f"mesh {np.median(np.abs(nonzero_eigs(own.L, own.B, 20, c) / ref - 1)):.4f}"]
+        cells = [percent(np.median(np.abs(nonzero_eigs(own.L, own.B, 20, c) / ref - 1)))]
         for m in methods:
             L, M = operator(V, m)
             ev = nonzero_eigs(L, M, 20, components(L))
-            cells.append(f"{m} {np.median(np.abs(ev - ref) / ref):.4f}")
-        print(f"{name:18s} {len(V):6d} | " + " | ".join(cells), flush=True)
+            cells.append(percent(np.median(np.abs(ev - ref) / ref)))
+        table.add(Path(name).stem, f"{len(V):,}", f"{nr:,}", percent(gap), *cells)
+    table.close()
 
 
 def knee(n, ks):
@@ -190,23 +198,32 @@ def heat(n_target, mesh="stanford-bunny.obj"):
         print(f"{name:16s} nnz/row {lap.L.nnz / lap.n:5.1f} build {tb:6.2f} s  heat column {th:6.2f} s", flush=True)
 
 
+SECTIONS = ("spheres", "shapes", "knee", "heat")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--heat-n", type=int, default=134_000)
+    p.add_argument("--sections", nargs="*", choices=SECTIONS, default=list(SECTIONS), help="parts to run")
+    p.add_argument("--json-dir", help="also write the real shapes' table as point_clouds.json in this folder")
     a = p.parse_args(argv)
     methods = ["delaunay", "robust_laplacian", "belkin", "liu"]
     if a.quick:
         spheres([2000, 8000], methods)
         shapes(["spot.obj", "fertility.off"], methods)
         return
-    spheres([4000, 16000], methods)
-    shapes(["spot.obj", "cow.obj", "fertility.off", "rocker-arm.obj", "cheburashka.obj",
-            "fandisk.obj", "homer.obj", "armadillo.obj", "stanford-bunny.obj", "suzanne.obj",
-            "beetle.obj"], methods[:3])
-    knee(16000, {"delaunay": [8, 12, 20, 30], "robust_laplacian": [12, 30],
-                 "belkin": [16, 32, 64]})
-    heat(a.heat_n)
+    if "spheres" in a.sections:
+        spheres([4000, 16000], methods)
+    if "shapes" in a.sections:
+        shapes(["spot.obj", "cow.obj", "fertility.off", "rocker-arm.obj", "cheburashka.obj",
+                "fandisk.obj", "homer.obj", "armadillo.obj", "stanford-bunny.obj", "suzanne.obj",
+                "beetle.obj"], methods[:3], a.json_dir)
+    if "knee" in a.sections:
+        knee(16000, {"delaunay": [8, 12, 20, 30], "robust_laplacian": [12, 30],
+                     "belkin": [16, 32, 64]})
+    if "heat" in a.sections:
+        heat(a.heat_n)
 
 
 if __name__ == "__main__":
