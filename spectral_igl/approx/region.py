@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..accuracy import info as make_info
+from ..laplacian.units import dimension
 from .uniformization import rate_matrix, terms, uniformize
 
 __all__ = ["region_heat_column", "dirichlet_heat", "grow_region", "patches", "vertex_spacing", "heat_drift",
@@ -257,6 +258,11 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float, mass=None
     return u, e, lost, products
 
 
+def _ball_measure(radius: float, d: int) -> float:
+    """Area (d = 2) or volume (d = 3) of a flat ball of the given radius."""
+    return math.pi * radius ** 2 if d == 2 else 4.0 / 3.0 * math.pi * radius ** 3
+
+
 def first_radius(t: float, h2_source: float, goal: float) -> float:
     """The radius a region starts from: a Gaussian's tail :math:`\\sqrt{4t\\log(1/m)}` for the
     heat m allowed outside, or, where t is short against the source's own rate and heat moves by
@@ -326,6 +332,12 @@ def region_heat_column(lap, t: float, source: int, tol: float, budget: float = B
     h2 = vertex_spacing(lap)
     radius = first_radius(t, h2[source], goal)
     limit = int(MAX_FRACTION * n)
+    d = dimension(lap)
+    if d in (2, 3) and _ball_measure(radius, d) > MAX_FRACTION * area and size > limit:
+        # the first region would already be a flat ball of more than the share allowed: the
+        # global path's turn, without growing a region ring by ring to find it out
+        return None, {"note": f"the first region's radius {radius:.3g} spans more than "
+                              f"{MAX_FRACTION:g} of the component's measure", "cost": 0.0}
     spent = 0.0
     while True:
         R, nearest_out = grow_region(L, h2, source, radius, limit=max(int(MAX_FRACTION * size), 1))
