@@ -73,6 +73,16 @@ __all__ = ["local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel"]
 U = 2.0 ** -53
 
 
+def _metzler_and_time(lap, t, time_unit, name):
+    """(lap, absolute t) of a local function's arguments; a Laplacian that is not Metzler refused."""
+    lap = as_laplacian(lap)
+    if not lap.is_metzler:
+        raise ValueError(f"{name} needs a Metzler Laplacian (lumped mass and non-negative "
+                         f"edge weights), got {lap!r}: build it with mass='lumped' and positive=True "
+                         "(the default of sig.laplacian on triangle meshes)")
+    return lap, float(shape_time(lap, t, time_unit))
+
+
 def _global(lap, t, source, tol, why):
     K, info = heat_kernel(lap, t, source, method=choose_method(lap, heat(t), tol), tol=tol,
                           return_info=True)
@@ -140,12 +150,7 @@ def local_heat_kernel(lap: Laplacian, t: float, source, tol: float = 1e-8, retur
     >>> bool(np.all(np.abs(full - k) <= info["abs_error"] + 1e-12 * full.max()))
     True
     """
-    lap = as_laplacian(lap)
-    if not lap.is_metzler:
-        raise ValueError("local_heat_kernel needs a Metzler Laplacian (lumped mass and non-negative "
-                         f"edge weights), got {lap!r}: build it with mass='lumped' and positive=True "
-                         "(the default of sig.laplacian on triangle meshes)")
-    t = float(shape_time(lap, t, time_unit))
+    lap, t = _metzler_and_time(lap, t, time_unit, "local_heat_kernel")
     source = as_index(source, lap.n, "source")
     tol = as_tol(tol, "tol")
     return_info = as_flag(return_info, "return_info")
@@ -218,12 +223,7 @@ def local_mexican_hat(lap: Laplacian, t: float, source, tol: float = 1e-8, retur
     >>> bool(np.all(np.abs(full - h) <= info["abs_error"] + 1e-12 * np.abs(full).max()))
     True
     """
-    lap = as_laplacian(lap)
-    if not lap.is_metzler:
-        raise ValueError("local_mexican_hat needs a Metzler Laplacian (lumped mass and non-negative "
-                         f"edge weights), got {lap!r}: build it with mass='lumped' and positive=True "
-                         "(the default of sig.laplacian on triangle meshes)")
-    t = float(shape_time(lap, t, time_unit))
+    lap, t = _metzler_and_time(lap, t, time_unit, "local_mexican_hat")
     source = as_index(source, lap.n, "source")
     tol = as_tol(tol, "tol")
     return_info = as_flag(return_info, "return_info")
@@ -340,12 +340,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     ...             <= info["abs_error"][:, [5]].toarray()[stored, 0] + 1e-12 * full.max()))
     True
     """
-    lap = as_laplacian(lap)
-    if not lap.is_metzler:
-        raise ValueError("sparse_heat_kernel needs a Metzler Laplacian (lumped mass and non-negative "
-                         f"edge weights), got {lap!r}: build it with mass='lumped' and positive=True "
-                         "(the default of sig.laplacian on triangle meshes)")
-    t = float(shape_time(lap, t, time_unit))
+    lap, t = _metzler_and_time(lap, t, time_unit, "sparse_heat_kernel")
     threshold = as_tol(threshold, "threshold")
     tol = as_tol(tol, "tol")
     block = as_int(block, "block", lo=1)
