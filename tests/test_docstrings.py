@@ -8,12 +8,16 @@ import importlib.util
 import inspect
 import pkgutil
 import re
+import sys
 import warnings
 from pathlib import Path
 
 import pytest
 
 import spectral_igl
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "_ext"))
+from readme_tools import import_object  # noqa: E402  (the docs' own importer of dotted names)
 
 
 def _modules():
@@ -93,18 +97,8 @@ def _api_rst_names() -> list[str]:
 
 
 def _resolve(dotted: str):
-    """The object ``spectral_igl.<dotted>``: the longest importable module prefix, then attributes
-    (as autosummary resolves it)."""
-    parts = ("spectral_igl." + dotted).split(".")
-    for i in range(len(parts), 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:i]))
-        except ImportError:
-            continue
-        for attr in parts[i:]:
-            obj = getattr(obj, attr)
-        return obj
-    raise ImportError(dotted)
+    """The object ``spectral_igl.<dotted>``, as autosummary resolves it."""
+    return import_object("spectral_igl." + dotted)
 
 
 def _public():
