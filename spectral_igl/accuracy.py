@@ -31,10 +31,36 @@ import warnings
 
 import numpy as np
 
-__all__ = ["AccuracyWarning", "BOUND_KINDS", "weakest", "warn_missed", "relative_error", "info"]
+__all__ = ["AccuracyWarning", "BOUND_KINDS", "UNIT_ROUNDOFF", "rounding_gamma", "weakest", "warn_missed",
+           "relative_error", "info"]
 
 #: the kinds of a bound, strongest first
 BOUND_KINDS = ("proof", "estimate")
+
+#: u, the unit roundoff of float64 (round to nearest)
+UNIT_ROUNDOFF = 2.0 ** -53
+
+
+def rounding_gamma(m):
+    r"""Higham's :math:`\gamma_m = m u / (1 - m u)`, u = :data:`UNIT_ROUNDOFF`: the relative
+    rounding of a sum, or a product, of m floating-point terms (valid while :math:`m u < 1`).
+
+    Parameters
+    ----------
+    m : int or float
+        Number of terms (operations).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from spectral_igl.accuracy import rounding_gamma, UNIT_ROUNDOFF
+    >>> rounding_gamma(1) > UNIT_ROUNDOFF, rounding_gamma(10) < 11 * UNIT_ROUNDOFF
+    (True, True)
+    """
+    return m * UNIT_ROUNDOFF / (1.0 - m * UNIT_ROUNDOFF)
 
 
 class AccuracyWarning(RuntimeWarning):

@@ -59,7 +59,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._validate import as_flag, as_index, as_int, as_tol
-from .accuracy import info as make_info
+from .accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from .accuracy import warn_missed
 from .approx import choose_method
 from .approx.region import (GROWTH, MAX_FRACTION, dirichlet_heat, first_radius, grow_region, patches,
@@ -70,7 +70,6 @@ from .laplacian import Laplacian, as_laplacian, shape_time
 
 __all__ = ["local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel"]
 
-U = 2.0 ** -53
 
 
 def _metzler_and_time(lap, t, time_unit, name):
@@ -259,9 +258,6 @@ def _heat_derivative(lap, t, K, E):
     carried = t * (absL @ E) / lap.mass
     return H, (rounding + carried) * (1.0 + _gamma(width + 4))
 
-
-def _gamma(k):
-    return k * U / (1.0 - k * U)
 
 
 def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 64,

@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from .._validate import as_array, as_choice, as_flag, as_int, describe
-from ..accuracy import info as bound_info, weakest
+from ..accuracy import info as bound_info, rounding_gamma, weakest
 from ..descriptors import hks
 from ..laplacian import as_laplacian
 from ..laplacian.units import TIME_UNITS, time_scale
@@ -40,8 +40,8 @@ EPS = np.finfo(float).eps
 
 
 def _gamma(m: int) -> float:
-    """:math:`\\gamma_m = m u / (1 - m u)`: the relative rounding of a sum or product of m terms."""
-    return m * EPS / (1.0 - m * EPS)
+    """:math:`\\gamma_{2m}`: the rounding of m terms, counted with machine epsilon (2u) as unit."""
+    return rounding_gamma(2 * m)
 
 
 def shape_dna(lap, k: int = 50, normalize: str | None = "shape", return_info: bool = False):

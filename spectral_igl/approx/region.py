@@ -36,7 +36,7 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..accuracy import info as make_info
+from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
 from .uniformization import rate_matrix, terms, uniformize
 
@@ -51,11 +51,7 @@ MAX_FRACTION = 0.25
 BUDGET = 200.0
 #: growth of the radius per attempt, at least
 GROWTH = 1.3
-U = 2.0 ** -53
 
-
-def _gamma(k):
-    return k * U / (1.0 - k * U)
 
 
 def heat_drift(lap) -> float:

@@ -40,6 +40,7 @@ import sys
 import numpy as np
 import scipy.sparse as sp
 
+from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 
 __all__ = ["metzler_heat", "uniformize", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL"]
 
@@ -47,13 +48,9 @@ __all__ = ["metzler_heat", "uniformize", "rate", "rate_matrix", "products_needed
 STEP = 512.0
 #: default bound of the truncated Poisson tails (all steps), relative to each column's maximum
 TAIL = 1e-32
-U = 2.0 ** -53
 #: t * alpha beyond which the step count is not even formed
 MAX_RATE_TIME = 1e12
 
-
-def _gamma(k):
-    return k * U / (1.0 - k * U)
 
 
 def rate(lap):

@@ -9,7 +9,7 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from .._validate import as_flag, as_int, as_positive, as_tol, check_dense_size, describe
-from ..accuracy import weakest
+from ..accuracy import rounding_gamma as _gamma, weakest
 from ..laplacian import Laplacian, as_laplacian, lambda_max, lambda_max_kind, mass_ratio
 from ..laplacian.units import dimension
 from ..progress import progress_bar
@@ -285,12 +285,6 @@ def _rayleigh_ritz(lap, X):
     H, G = X.T @ (lap.L @ X), X.T @ (lap.B @ X)
     theta, Q = sla.eigh((H + H.T) / 2, (G + G.T) / 2)
     return np.maximum(theta, 0.0), X @ Q
-
-
-def _gamma(m: int) -> float:
-    """Higham's γ_m = m u / (1 - m u): the relative rounding of a sum of m products."""
-    u = np.finfo(np.float64).eps / 2
-    return m * u / (1 - m * u)
 
 
 def _residual_bounds(lap, vals, LX, BX, X):
