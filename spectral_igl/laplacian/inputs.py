@@ -27,7 +27,7 @@ from .points import point_cloud_laplacian
 __all__ = ["as_laplacian"]
 
 
-def as_laplacian(x, name: str = "lap") -> Laplacian:
+def as_laplacian(x, name: str = "lap", **options) -> Laplacian:
     r"""A :class:`Laplacian` from a Laplacian, a ``(V, F)``/``(V, T)`` pair or a mesh object.
 
     Parameters
@@ -38,6 +38,11 @@ def as_laplacian(x, name: str = "lap") -> Laplacian:
         :func:`spectral_igl.laplacian`.
     name : str
         The argument's name in error messages.
+    **options
+        Keyword arguments of :func:`spectral_igl.laplacian` (``weights``, ``mass``...) used
+        when ``x`` is a mesh with cells; a Laplacian is returned as it is, and a point cloud
+        (a mesh object without cells) gets :func:`spectral_igl.point_cloud_laplacian`'s
+        defaults.
 
     Returns
     -------
@@ -58,16 +63,18 @@ def as_laplacian(x, name: str = "lap") -> Laplacian:
     >>> lap = as_laplacian((V, F))
     >>> lap.n, as_laplacian(lap) is lap
     (42, True)
+    >>> as_laplacian((V, F), mass="full").lumped
+    False
     """
     if isinstance(x, Laplacian):
         return x
     if isinstance(x, (tuple, list)) and len(x) == 2:
-        return laplacian(*x)
+        return laplacian(*x, **options)
     if is_mesh_object(x):
         V, C = as_mesh_arrays(x, name=name, need_cells=False)
         if C is None:
             return point_cloud_laplacian(V)
-        return laplacian(V, C)
+        return laplacian(V, C, **options)
     hint = ""
     if isinstance(x, np.ndarray) and x.ndim == 2:
         hint = (" (an array alone is ambiguous: pass (V, F) as one tuple for a mesh, or "
