@@ -486,13 +486,20 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
         ``"eigen"``: the original truncated definition. Otherwise the diagonal of
         :math:`K = \psi_e(\tilde L)B^{-1}` spectrum-free; the normaliser
         :math:`\operatorname{tr}\psi_e(\tilde L) = \operatorname{tr}(KB)` is then
-        :math:`\sum_i m_i K(i,i)` for a lumped mass matrix (exact); for a full mass matrix
+        :math:`\sum_i m_i K(i,i)` for a lumped mass matrix; for a full mass matrix
         :math:`\operatorname{tr}(KB) \ne \sum_i m_i K(i,i)` (the off-diagonal
         :math:`K_{ij}B_{ij}` differ, by a factor of about 2 at high energies), so it is
-        :math:`\sum_l \psi_e(\lambda_l)` from the dense spectrum for
-        :math:`n \le` ``WKS_DENSE_MAX`` = 3000 (exact) and a Hutchinson estimate with ``WKS_TRACE_PROBES``
-        Rademacher vectors above (relative error about :math:`(2/64)^{1/2}` times
-        :math:`\|\psi_e(\tilde L)\|_F/\operatorname{tr}\psi_e(\tilde L)`).
+        :math:`\operatorname{tr} r(\tilde L) = n\alpha_0 + \sum_j \mathrm{Re}\,c_j
+        \operatorname{tr}((\sigma L - z_jB)^{-1}B)` of the rational approximation r of the
+        diagonal, each :math:`\operatorname{tr}(A^{-1}B) = \sum_{ij}(A^{-1})_{ij}B_{ij}` from
+        the entries of :math:`A^{-1}` on the pattern of B that the same selected inversion
+        gives (:meth:`spectral_igl.linalg.LDLT.selected_inverse`): within
+        :math:`n\varepsilon` of the exact trace (:math:`\varepsilon` the diagonal's
+        certified sup error, every one of the n eigenvalues contributing at most that), at
+        the cost of the lumped case (measured 1.0--2.0 times it, 3k to 43k vertices). Only
+        where no rational fit is taken does it fall back to the dense spectrum
+        (:math:`n \le` ``WKS_DENSE_MAX``) or a Hutchinson estimate with ``WKS_TRACE_PROBES``
+        probes, both labelled estimates.
     progress : bool, optional
         Spectrum-free methods: a progress bar on stderr, one step per energy (see
         :mod:`spectral_igl.progress`; default off).
@@ -501,8 +508,8 @@ def wks(lap, energies=None, sigma: float | None = None, k: int = 100, method: st
         result. Spectrum-free: the diagonal's bound :math:`\delta_d` and the normaliser's
         :math:`\delta_\tau` propagated through the ratio,
         :math:`(\delta_d + |\widetilde{WKS}|\,\delta_\tau)/(\tilde\tau - \delta_\tau)`;
-        ``bound_kind`` the weakest of the parts (the full-mass normaliser is an estimate, said
-        in ``note``). ``"eigen"``: ``nan`` and ``None`` (a truncated expansion by definition;
+        ``bound_kind`` the weakest of the parts (a proof for either mass matrix where the
+        diagonal is one; a normaliser that is an estimate says so in ``note``). ``"eigen"``: ``nan`` and ``None`` (a truncated expansion by definition;
         its eigenpairs are not certified).
     **kwargs
         Passed to :func:`spectral_igl.kernel_diagonal`.

@@ -10,8 +10,8 @@ from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, round
 from ..laplacian import lambda_max, lambda_max_kind
 from ..laplacian.cache import SLOTS
 from ..linalg import (
-    grounded_factor,
     MassTraces,
+    grounded_factor,
     inverse_mass_diagonal,
     lambda_min_positive,
     lambda_min_positive_kind,
