@@ -142,7 +142,7 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
 
 
 def diagonals_from_fits(lap, upper, real, fits, eps, traces=None) -> MultiDiagonal:
-    """The diagonals of fitted partial fractions with common poles: one factorization and one
+    r"""The diagonals of fitted partial fractions with common poles: one factorization and one
     selected inversion per pole (a conjugate pair counts once), each factor dropped after use.
     Each member's r puts r(0)/V_c on ker L (the caller takes it out for singular filters).
     ``traces`` (a :class:`~spectral_igl.linalg.MassTraces` started with the members'
