@@ -131,10 +131,18 @@ struct Symbolic {
     std::vector<i64> aptr;      // ns + 1 offsets into asrc/adst
     std::vector<i64> asrc;      // index into the input values
     std::vector<i64> adst;      // position in the m x m frontal matrix (column-major)
+    std::vector<i64> amirror;   // index into the input values of the mirror entry, -1 on the diagonal
     i64 nnz_L = 0;              // stored entries of L (panels)
     double flops = 0.0;
 
     int m(int J) const { return int(rptr[J + 1] - rptr[J]); }
+
+    // index of the input entry (row r, column c), -1 when the pattern has none
+    static i64 mirror_of(const int *indptr, const int *indices, int c, int r) {
+        for (i64 k = indptr[c]; k < indptr[c + 1]; ++k)
+            if (indices[k] == r) return k;
+        return -1;
+    }
     int nc(int J) const { return first[J + 1] - first[J]; }
 
     Symbolic(int n_, const int *indptr, const int *indices, i64 nnz, const int *p0) : n(n_), nnz_in(nnz) {
@@ -327,6 +335,7 @@ struct Symbolic {
         aptr.assign(ns + 1, 0);
         asrc.resize(lp[n]);
         adst.resize(lp[n]);
+        amirror.resize(lp[n]);
         i64 na = 0;
         for (int J = 0; J < ns; ++J) {
             int mJ = m(J);
@@ -334,6 +343,7 @@ struct Symbolic {
             for (int j = first[J]; j < first[J + 1]; ++j)
                 for (i64 k = lp[j]; k < lp[j + 1]; ++k) {
                     asrc[na] = lsrc[k];
+                    amirror[na] = li[k] == j ? -1 : mirror_of(indptr, indices, perm[li[k]], perm[j]);
                     adst[na++] = loc[li[k]] + i64(j - first[J]) * mJ;
                 }
             aptr[J + 1] = na;
@@ -644,25 +654,28 @@ struct Factor {
         }
     }
 
-    // diag(A^-1), internal order: selected inversion, root first
-    std::vector<T> inverse_diagonal() const {
+    // diag(A^-1), internal order: selected inversion, root first; with pattern (nnz_in
+    // entries) also A^-1 on the input pattern, input order
+    std::vector<T> inverse_diagonal(T *pattern = nullptr) const {
         std::vector<T> out;
         std::exception_ptr err;
-        inverse_diagonal_kernel(out, err);
+        inverse_diagonal_kernel(out, pattern, err);
         if (err) std::rethrow_exception(err);
         return out;
     }
 
-    ISA_AVX2 void inverse_diagonal_avx2(std::vector<T> &out, std::exception_ptr &err) const {
-        inverse_diagonal_body(out, err);
+    // selected inversion: diag(A^-1) in out (internal order) and, when pattern is not null,
+    // the entries of A^-1 on the input pattern (both triangles, input order) in pattern
+    ISA_AVX2 void inverse_diagonal_avx2(std::vector<T> &out, T *pattern, std::exception_ptr &err) const {
+        inverse_diagonal_body(out, pattern, err);
     }
-    ISA_BASELINE void inverse_diagonal_baseline(std::vector<T> &out, std::exception_ptr &err) const {
-        inverse_diagonal_body(out, err);
+    ISA_BASELINE void inverse_diagonal_baseline(std::vector<T> &out, T *pattern, std::exception_ptr &err) const {
+        inverse_diagonal_body(out, pattern, err);
     }
-    void inverse_diagonal_kernel(std::vector<T> &out, std::exception_ptr &err) const {
-        if (isa::avx2()) inverse_diagonal_avx2(out, err); else inverse_diagonal_baseline(out, err);
+    void inverse_diagonal_kernel(std::vector<T> &out, T *pattern, std::exception_ptr &err) const {
+        if (isa::avx2()) inverse_diagonal_avx2(out, pattern, err); else inverse_diagonal_baseline(out, pattern, err);
     }
-    ISA_BODY void inverse_diagonal_body(std::vector<T> &out, std::exception_ptr &err) const {
+    ISA_BODY void inverse_diagonal_body(std::vector<T> &out, T *pattern, std::exception_ptr &err) const {
         try {
         const Symbolic &s = *S;
         std::vector<T> diag(s.n);
@@ -765,6 +778,12 @@ struct Factor {
             for (int k = 0; k < nc; ++k)
                 for (int i = 0; i < mr; ++i) ZJ[size_t(nc + i) * m + k] = ZJ[size_t(k) * m + nc + i];
             for (int k = 0; k < nc; ++k) diag[f + k] = ZJ[size_t(k) * m + k];
+            if (pattern)   // the input's entries in J's columns (and their mirrors) lie in Z_J
+                for (i64 k = s.aptr[J]; k < s.aptr[J + 1]; ++k) {
+                    const T v = ZJ[s.adst[k]];
+                    pattern[s.asrc[k]] = v;
+                    if (s.amirror[k] >= 0) pattern[s.amirror[k]] = v;
+                }
             pending[J] = s.nchild[J];
             if (pending[J] == 0) std::vector<T>().swap(ZJ);
         }
@@ -860,6 +879,18 @@ void bind_factor(nb::module_ &mod, const char *name) {
                  return to_numpy<T>(std::move(out), {size_t(s.n)});
              },
              "diag(A^-1) by selected inversion, original ordering.")
+        .def("selected_inverse",
+             [](const FT &F) {
+                 const Symbolic &s = *F.S;
+                 std::vector<T> vals(size_t(s.nnz_in), T(0));
+                 {
+                     nb::gil_scoped_release rel;
+                     F.inverse_diagonal(vals.data());
+                 }
+                 return to_numpy<T>(std::move(vals), {size_t(s.nnz_in)});
+             },
+             "The entries of A^-1 on the analysed pattern (both triangles), in the order of the "
+             "values given to the factorization, by selected inversion.")
         .def("pivots", [](const FT &F) {
             const Symbolic &s = *F.S;
             std::vector<T> out(s.n);

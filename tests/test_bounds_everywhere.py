@@ -13,10 +13,11 @@ from data_generators import icosphere
 
 import spectral_igl as sig
 from spectral_igl import filters as F
-from spectral_igl.accuracy import BOUND_KINDS
+from spectral_igl.accuracy import BOUND_KINDS, weakest
 from spectral_igl.applications import diffusion_smooth
 from spectral_igl.cli import main
 from spectral_igl.collection import Job, Shape, load, process_shape
+from spectral_igl.descriptors import _wks_filter
 from spectral_igl.linalg.threads import blas_threads
 from spectral_igl.quantity import evaluate
 
@@ -257,9 +258,12 @@ def test_wks_bound_propagates_the_normaliser(name):
     for method in ("exact", "dense", "auto"):
         W, info = sig.wks(lap, E, method=method, return_info=True)
         check(W, info, truth)
-        if not lap.lumped:       # the normaliser of a full mass comes from the dense spectrum
-            assert info["bound_kind"] == "estimate" and "normaliser" in info["note"]
-        elif method == "exact":
+        # the normaliser is proved with either mass: the result is as strong as its diagonals
+        diagonals = [sig.kernel_diagonal(lap, _wks_filter(float(e), sigma), method=method, return_info=True)[1]
+                     for e in E]
+        assert info["bound_kind"] == weakest(*(d["bound_kind"] for d in diagonals)), (method, info.get("note"))
+        assert "normaliser" not in info.get("note", "")
+        if lap.lumped and method == "exact":
             assert info["bound_kind"] == "proof"
     w, info = sig.wks(lap, E[2], sigma=sigma, method="exact", return_info=True)
     check(w, info, truth[:, 2])

@@ -128,15 +128,26 @@ def test_wks_every_mass_matrix_against_dense(mass):
 
 
 def test_wks_trace_estimate_above_the_dense_limit(monkeypatch):
+    """The last resort of the full-mass normaliser, where no rational fit is taken: Hutchinson's
+    estimate, labelled."""
     import spectral_igl.descriptors as D
 
-    lap = sig.laplacian(*torus(16, 8, jitter=0.3, seed=5))
+    def refuse(*args, **kwargs):
+        raise D.NoSelinv("refused for the test")
+
+    def no_poles(*args, **kwargs):
+        raise ValueError("no common poles found for this family")
+
+    lap = sig.laplacian(*torus(16, 8, jitter=0.3, seed=5), mass="full")
     lam, X = sig.dense_eigs(lap)
     E = np.log(lam[[len(lam) // 4, len(lam) // 2]])
     psi = np.exp(-((E[None] - np.log(np.maximum(lam[1:, None], 1e-300))) ** 2) / (2 * 0.4 ** 2))
     ref = (X[:, 1:] ** 2) @ psi / psi.sum(axis=0)
     monkeypatch.setattr(D, "WKS_DENSE_MAX", 10)  # force the trace estimate
-    W = sig.wks(lap, E, sigma=0.4, method="exact")
+    monkeypatch.setattr(D, "selinv_kernel", refuse)
+    monkeypatch.setattr(D, "family_diagonals", no_poles)
+    W, info = sig.wks(lap, E, sigma=0.4, method="exact", return_info=True)
+    assert info["bound_kind"] == "estimate" and "Hutchinson" in info["note"]
     # the diagonal is exact, the normaliser an estimate: one factor per column
     ratio = W / ref
     assert np.allclose(ratio, ratio[0], rtol=1e-6)

@@ -12,9 +12,9 @@ One-to-all spectral distances and the descriptors need :math:`G_{ii}` at all n v
 from .core import EXACT_MAX, METHODS, check_diagonal_options, heat_projection_applies, kernel_diagonal
 from .probing import distance_colouring
 from ..linalg import inverse_mass_diagonal
-from .selinv import SelinvKernel, selinv_kernel, selinv_supported
+from .selinv import NoSelinv, SelinvKernel, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal, low_rank, phi_values
 
-__all__ = ["check_diagonal_options", "heat_projection_applies", "kernel_diagonal", "METHODS", "EXACT_MAX", "distance_colouring", "SelinvKernel",
+__all__ = ["check_diagonal_options", "heat_projection_applies", "kernel_diagonal", "METHODS", "EXACT_MAX", "distance_colouring", "NoSelinv", "SelinvKernel",
            "selinv_kernel", "selinv_supported", "inverse_mass_diagonal", "eigen_diagonal",
            "low_rank", "phi_values"]

@@ -10,6 +10,7 @@ from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, round
 from ..laplacian import lambda_max, lambda_max_kind
 from ..laplacian.cache import SLOTS
 from ..linalg import (
+    MassTraces,
     grounded_factor,
     inverse_mass_diagonal,
     lambda_min_positive,
@@ -61,7 +62,7 @@ class SelinvKernel:
         integer = p is not None and abs(p - round(p)) < 1e-12 and round(p) >= 1
         self.power = int(round(p)) if integer and round(p) in (1, 2) else 0
         self.circle = int(round(p)) if integer and round(p) >= 3 else 0
-        self._diag = None
+        self._diag = self._trace = None
         self._pending, self._done = [], []   # blocks E whose R E the diagonal's pass computes
         #: keep the diagonal's factorizations in ``lap.cache`` (for later columns) instead of
         #: dropping each after use
@@ -266,14 +267,35 @@ class SelinvKernel:
                 self._diag = self._power_diagonal() if self.power else self._rational_diagonal(progress)
         return self._diag
 
+    def trace(self, progress=None):
+        r"""``(tr r(L~), bound)`` for a full mass matrix: the trace of R B, computed in the
+        diagonal's pass (one selected inversion per pole serves both, see
+        :class:`~spectral_igl.linalg.MassTraces`), and a bound of
+        :math:`|\operatorname{tr}\varphi(\tilde L) - \operatorname{tr}(RB)|`.
+
+        :math:`\operatorname{tr}\varphi(\tilde L) - \operatorname{tr} r(\tilde L) =
+        \sum_l (\varphi - r)(\lambda_l)` over the n eigenvalues (r put to 0 on ker L for a
+        singular filter, as :math:`\varphi`), each term within :math:`\varepsilon` (the
+        certified sup error on the spectrum's enclosure plus the solves' rounding, as for the
+        diagonal): the bound is :math:`n\varepsilon` plus the rounding of the sums.
+        """
+        if self.lap.lumped or self.circle or self.power:
+            raise NoSelinv("the kernel's trace is computed for partial fractions and a full mass matrix "
+                           "(with a lumped mass it is the mass-weighted diagonal)")
+        self.diagonal(progress)
+        return self._trace
+
     def _rational_diagonal(self, progress=None):
-        diag = np.zeros(self.lap.n)
+        lap = self.lap
+        diag = np.zeros(lap.n)
         blocks, self._pending = self._pending, []
         E = np.hstack(blocks) if blocks else None
         out = None if E is None else np.zeros(E.shape)
+        traces = None if lap.lumped else MassTraces(lap, self.pf.alpha0.real)
         with progress_bar(len(self.pf.terms), "kernel diagonal", progress, unit="pole") as bar:
             for c, k, fac in self._factors(keep=self.keep_factors):
-                diag += k * (c * fac.inverse_diagonal()).real
+                d = fac.inverse_diagonal() if traces is None else traces.inverse_diagonal(fac, k * c)
+                diag += k * (c * d).real
                 if E is not None:
                     out += k * (c * fac.solve(E)).real
                 del fac
@@ -281,6 +303,11 @@ class SelinvKernel:
         diag += self.pf.alpha0.real * self.minv
         if self.filt.singular:
             diag -= self._kernel_part()
+            if traces is not None:    # r(0)/V_c on each component: r(0) per component in the trace
+                traces.subtract(lap.n_components * float(np.real(self.pf(np.zeros(1))[0])))
+        if traces is not None:
+            self._trace = (float(traces.values[0]),
+                           float(lap.n * self.eps * (1.0 + 4.0 * EPS) + traces.rounding()[0]))
         if E is not None:
             out += self.pf.alpha0.real * mass_solve(self.lap, E, backend="ldlt")
             if self.filt.singular:

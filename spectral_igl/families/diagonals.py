@@ -6,7 +6,10 @@ r"""Kernel diagonals of a family of filters sharing poles: one selected inversio
 so another member costs a weighted sum of the selected-inverse diagonals already computed
 (the poles and residues: :mod:`.fits`). Each factor is dropped as soon as its diagonal is
 taken, so at most one factor is held at a time. Then
-:math:`|G^{(k)}_{ii} - R^{(k)}_{ii}| \le \varepsilon_k (B^{-1})_{ii}` at every vertex.
+:math:`|G^{(k)}_{ii} - R^{(k)}_{ii}| \le \varepsilon_k (B^{-1})_{ii}` at every vertex. With a
+full mass matrix the same selected inversions also give each member's trace
+:math:`\operatorname{tr} r_k(\tilde L)` (:class:`~spectral_igl.linalg.MassTraces`), within
+:math:`n\varepsilon_k` of :math:`\operatorname{tr}\varphi_k(\tilde L)`.
 """
 from __future__ import annotations
 
@@ -16,12 +19,14 @@ import numpy as np
 
 from ..approx.rational import certifiable
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
-from ..linalg import inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind, ldlt
+from ..linalg import MassTraces, inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind, ldlt
 from .fits import as_times, coefficients, family_poles, heat_plan, plan_poles, pole_factorizations
 
 __all__ = ["MultiDiagonal", "family_diagonals", "diagonals_from_fits", "heat_diagonals"]
 
 log = logging.getLogger(__name__)
+
+EPS = np.finfo(float).eps
 
 
 class MultiDiagonal:
@@ -40,12 +45,21 @@ class MultiDiagonal:
     bound_kind : {"proof", "estimate"}
         ``"proof"`` when every member's sup error is proved (built-in filters, WKS
         included) and the spectrum's enclosure is certified.
+    trace : (T,) float or None
+        Full mass matrix (:func:`family_diagonals`): :math:`\operatorname{tr} r_k(\tilde L)`,
+        from the same selected inversions; None with a lumped mass (there it is
+        :math:`\sum_i m_i R^{(k)}_{ii}`).
+    trace_bound : (T,) float or None
+        Bound of :math:`|\operatorname{tr}\varphi_k(\tilde L) - \operatorname{tr} r_k(\tilde L)|`:
+        :math:`n\varepsilon_k` plus the rounding of the sums.
     """
 
-    def __init__(self, values, eps, minv, n_factorizations, poles, bound_kind="proof"):
+    def __init__(self, values, eps, minv, n_factorizations, poles, bound_kind="proof", trace=None,
+                 trace_bound=None):
         self.values, self.eps, self.minv = values, np.asarray(eps, dtype=float), minv
         self.n_factorizations, self.poles = int(n_factorizations), poles
         self.bound_kind = bound_kind
+        self.trace, self.trace_bound = trace, trace_bound
 
     @property
     def abs_bound(self) -> np.ndarray:
@@ -104,29 +118,43 @@ def family_diagonals(lap, filters, targets, poles=None, a: float = 0.0, scales=N
         parts = [family_diagonals(lap, filters[sl], targets[sl], None, a,
                                   None if scales is None else scales[sl])
                  for sl in (slice(0, h), slice(h, None))]
+        traced = parts[0].trace is not None
         return MultiDiagonal(np.concatenate([p.values for p in parts], axis=1),
                              np.concatenate([p.eps for p in parts]), parts[0].minv,
                              sum(p.n_factorizations for p in parts), [p.poles for p in parts],
-                             "proof" if all(p.bound_kind == "proof" for p in parts) else "estimate")
-    out = diagonals_from_fits(lap, upper, real, fits, eps)
+                             "proof" if all(p.bound_kind == "proof" for p in parts) else "estimate",
+                             np.concatenate([p.trace for p in parts]) if traced else None,
+                             np.concatenate([p.trace_bound for p in parts]) if traced else None)
+    traces = None if lap.lumped else MassTraces(lap, coefficients(fits, upper, real)[0])
+    out = diagonals_from_fits(lap, upper, real, fits, eps, traces)
     if singular:
-        out.values -= np.outer(1.0 / lap.component_volume(),
-                               [float(np.real(pf(np.zeros(1))[0])) for pf, _ in fits])
+        r0 = np.array([float(np.real(pf(np.zeros(1))[0])) for pf, _ in fits])
+        out.values -= np.outer(1.0 / lap.component_volume(), r0)
+        if traces is not None:     # r(0)/V_c on each component: r(0) per component in the trace
+            traces.subtract(lap.n_components * r0)
+    if traces is not None:
+        out.trace = traces.values
+        out.trace_bound = lap.n * out.eps * (1.0 + 4.0 * EPS) + traces.rounding()
     proved = (all(certifiable(f) for f in filters) and lambda_max_kind(lap) == "proof"
               and (not singular or lambda_min_positive_kind(lap) == "proof"))
     out.bound_kind = "proof" if proved else "estimate"
     return out
 
 
-def diagonals_from_fits(lap, upper, real, fits, eps) -> MultiDiagonal:
-    """The diagonals of fitted partial fractions with common poles: one factorization and one
+def diagonals_from_fits(lap, upper, real, fits, eps, traces=None) -> MultiDiagonal:
+    r"""The diagonals of fitted partial fractions with common poles: one factorization and one
     selected inversion per pole (a conjugate pair counts once), each factor dropped after use.
-    Each member's r puts r(0)/V_c on ker L (the caller takes it out for singular filters)."""
+    Each member's r puts r(0)/V_c on ker L (the caller takes it out for singular filters).
+    ``traces`` (a :class:`~spectral_igl.linalg.MassTraces` started with the members'
+    :math:`\alpha_0`), when given, gathers the members' traces in the same pass."""
     minv = inverse_mass_diagonal(lap)
     al, C = coefficients(fits, upper, real)
     D = np.outer(minv, al)
     for j, (z, fac) in enumerate(pole_factorizations(lap, upper, real)):
-        d = fac.inverse_diagonal()
+        if traces is None:
+            d = fac.inverse_diagonal()
+        else:
+            d = traces.inverse_diagonal(fac, (2.0 if j < upper.size else 1.0) * C[:, j])
         del fac
         if j < upper.size:    # a conjugate pair: 2 Re(c d)
             D += 2.0 * (np.outer(d.real, C[:, j].real) - np.outer(d.imag, C[:, j].imag))

@@ -21,6 +21,7 @@ from .solves import (
                      inverse_mass_diagonal,
                      ldlt_factor,
                      ldlt_pattern,
+                     MassTraces,
                      mass_solve,
                      pseudo_solve,
                      shifted_factor,
@@ -28,6 +29,6 @@ from .solves import (
 
 __all__ = ["factorize", "Factor", "available_backends", "BACKENDS", "LDLT", "Pattern",
            "shifted_factor", "mass_solve", "inverse_mass_diagonal", "pseudo_solve", "grounded_vertices", "grounded_factor",
-           "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache", "eigs", "EIG_METHODS", "dense_eigs",
+           "ldlt_pattern", "ldlt_factor", "MassTraces", "check_backend", "clear_cache", "eigs", "EIG_METHODS", "dense_eigs",
            "cached_eigs", "lambda_min_positive", "lambda_min_positive_kind", "negative_inertia", "eigenvalue_bracket",
            "gap_lower_bound"]

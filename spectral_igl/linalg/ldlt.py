@@ -4,7 +4,8 @@
 not Hermitian), without pivoting: for symmetric positive definite matrices and for
 ``σL - zB`` with z off the real spectrum (a definite real or imaginary part), whose
 leading minors never vanish. It gives ``solve(b)`` and ``inverse_diagonal()``, the
-diagonal of ``A⁻¹`` by selected inversion (Takahashi's equations on the supernodes of the
+diagonal of ``A⁻¹`` by selected inversion (``selected_inverse()``: its entries on the pattern
+of A) (Takahashi's equations on the supernodes of the
 factor), at about the cost of a second factorization instead of n solves.
 
 The fill-reducing ordering is approximate minimum degree (compiled; four to ten times
@@ -279,6 +280,20 @@ class LDLT:
     def inverse_diagonal(self) -> np.ndarray:
         """diag(A⁻¹) by selected inversion."""
         return self._f.inverse_diagonal()
+
+    @serial_blas
+    def selected_inverse(self) -> sp.csc_matrix:
+        r"""(n, n) sparse: the entries of A⁻¹ on the sparsity pattern of ``self.pattern``.
+
+        The selected inversion behind :meth:`inverse_diagonal` forms, supernode by supernode,
+        the dense blocks of A⁻¹ on the rows of the factor, which hold every entry of the
+        pattern of A; this keeps them, at no extra factorization. With it,
+        :math:`\operatorname{tr}(A^{-1}M) = \sum_{ij} (A^{-1})_{ij} M_{ji}` for any symmetric M
+        whose pattern lies in A's (``np.dot(Z.data, self.pattern.values(M))``, the entries
+        in the same order).
+        """
+        p = self.pattern
+        return sp.csc_matrix((self._f.selected_inverse(), p.indices, p.indptr), shape=(self.n, self.n))
 
     def pivots(self) -> np.ndarray:
         """(n,) the diagonal D of the factorization, in the original ordering (its signs are

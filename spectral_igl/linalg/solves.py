@@ -22,13 +22,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._validate import as_flag, as_signal, check_finite_result, describe
+from ..accuracy import rounding_gamma
 from ..laplacian import Laplacian, as_laplacian, lambda_max
 from . import ldlt
 from .factor import check_backend, factorize
 
 log = logging.getLogger(__name__)
 
-__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "inverse_mass_diagonal", "grounded_vertices", "grounded_factor",
+__all__ = ["shifted_factor", "pseudo_solve", "mass_solve", "inverse_mass_diagonal", "MassTraces", "grounded_vertices", "grounded_factor",
            "ldlt_pattern", "ldlt_factor", "check_backend", "clear_cache"]
 
 
@@ -182,6 +183,60 @@ def inverse_mass_diagonal(lap) -> np.ndarray:
         return 1.0 / lap.mass
     return lap.cache.fetch("diagonal", "inverse_mass",
                            lambda: shifted_factor(lap, 0.0, 1.0, backend="ldlt").inverse_diagonal())
+
+
+class MassTraces:
+    r"""Traces :math:`\operatorname{tr} r_k(\tilde L)` of partial fractions sharing poles, for a
+    full mass matrix, accumulated pole by pole from the selected inversions of their factors.
+
+    For :math:`r_k(s) = \alpha_{0,k} + \sum_j w_{jk}/(\sigma s - z_j)` (a conjugate pair folded
+    into one pole, :math:`2\,\mathrm{Re}`),
+    :math:`\operatorname{tr} r_k(\tilde L) = n\alpha_{0,k} + \sum_j \mathrm{Re}\,w_{jk}
+    \operatorname{tr}\big((\sigma L - z_jB)^{-1}B\big)`, and
+    :math:`\operatorname{tr}(A^{-1}B) = \sum_{ij}(A^{-1})_{ij}B_{ij}` needs :math:`A^{-1}` only on
+    the pattern of B, which the selected inversion gives with the diagonal
+    (:meth:`~spectral_igl.linalg.LDLT.selected_inverse`).
+
+    Parameters
+    ----------
+    lap : Laplacian
+    alpha0 : float or (T,) float
+        The constant terms :math:`\alpha_{0,k}`.
+    """
+
+    def __init__(self, lap, alpha0):
+        self._bvals = ldlt_pattern(lap).values(lap.B)
+        al = np.atleast_1d(np.asarray(alpha0, dtype=float))
+        #: (T,) the traces so far
+        self.values = lap.n * al
+        #: (T,) the sums of the magnitudes of every term added
+        self.magnitude = lap.n * np.abs(al)
+        self._terms = 1
+
+    def inverse_diagonal(self, fac, weights) -> np.ndarray:
+        """diag(A⁻¹) of the LDLᵀ factor ``fac`` of A = σL - zB, adding
+        Re(``weights`` tr(A⁻¹B)) to the traces (``weights``: (T,) complex, or a scalar)."""
+        Z = fac.selected_inverse()
+        prod = Z.data * self._bvals
+        w = np.atleast_1d(weights)
+        self.values = self.values + (w * prod.sum()).real
+        self.magnitude = self.magnitude + np.abs(w) * float(np.abs(prod).sum())
+        self._terms += 1
+        return Z.diagonal()
+
+    def subtract(self, value) -> None:
+        """Take ``value`` (T,) off the traces (what a fit puts on ker L, computed exactly)."""
+        value = np.asarray(value, dtype=float)
+        self.values = self.values - value
+        self.magnitude = self.magnitude + np.abs(value)
+        self._terms += 1
+
+    def rounding(self) -> np.ndarray:
+        r"""(T,) bound of the rounding of the sums (not of the selected inverse's entries):
+        every trace is a sum of at most nnz + P + 2 products of complex numbers (P poles), so
+        :math:`2\gamma_{\mathrm{nnz}+P+4}` times the sum of their magnitudes bounds it (Higham,
+        §3.1 and §3.6: a complex product rounds within :math:`\sqrt2\gamma_2`)."""
+        return 2.0 * rounding_gamma(self._bvals.size + self._terms + 4) * self.magnitude
 
 
 def grounded_vertices(lap: Laplacian) -> np.ndarray:
