@@ -11,7 +11,7 @@ import scipy.sparse as sp
 from .._validate import as_mesh_arrays
 
 __all__ = ["row_cross", "element_measures", "mesh_components", "star_adjacency", "mean_value_weights",
-           "cotan_stiffness", "full_mass"]
+           "cotan_stiffness", "full_mass", "component_labels"]
 
 
 def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -75,6 +75,15 @@ def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     i = np.repeat(C[:, 0], k - 1)
     j = C[:, 1:].ravel()
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
+
+
+def component_labels(n: int, C: np.ndarray) -> np.ndarray:
+    """(n,) int64 connected component of each vertex of the elements ``C``, numbered in the
+    order of their smallest vertex as :class:`~spectral_igl.laplacian.Laplacian` numbers
+    them; a vertex in no element is a component of its own."""
+    from scipy.sparse import csgraph
+
+    return csgraph.connected_components(star_adjacency(n, C), directed=False)[1].astype(np.int64)
 
 
 def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
