@@ -10,10 +10,9 @@ from .._validate import as_flag, as_indices, as_mesh_arrays, as_nonnegative, as_
 from ..approx import SpectralOperator
 from ..filters import heat
 from ..laplacian import Laplacian, as_laplacian, laplacian
-from ..laplacian.elements import component_labels
+from ..laplacian.elements import element_measures, pattern_components
 from ..laplacian.inputs import as_laplacian_or_triangles
 from ..laplacian.units import optional_time
-from ..laplacian.elements import element_measures
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
                                        intrinsic_parts)
@@ -193,8 +192,7 @@ class HeatGeodesics:
                else lap_or_mesh)
         if isinstance(lap, tuple):
             self._lap, self._mesh = None, lap
-            self.n = lap[0].shape[0]
-            self._components = component_labels(self.n, lap[1])
+            self.n, self._components = lap[0].shape[0], None   # components: from the operators
             self._init_steps(step, t, progress)
             return
         lap = _as_laplacian(lap, ("triangle", "tet", "polygon", "points"))
@@ -242,6 +240,8 @@ class HeatGeodesics:
         elif step == "intrinsic_delaunay":
             V, C = self._mesh if lap is None else (lap.data["V"], _cells(lap))
             gx, gy, self.A, Fi, Lp, M, self.h = intrinsic_parts(V, C, self.mollify)
+            if self._components is None:   # flips keep the components: the mesh's are Lp's
+                self._components = pattern_components(Lp)[0]
             self.G = gradient_matrix(gx, gy, Fi, self.n)
             self._hats = (gx, gy, Fi)
             self._dim = 2
@@ -262,8 +262,9 @@ class HeatGeodesics:
         bar.set_postfix_str("heat factorization")
         # Poisson solve: ground one vertex per component (the rhs is consistent)
         ground = np.unique(self._components, return_index=True)[1]
-        self._fixed = ground
-        self._free = np.setdiff1d(np.arange(self.n), ground)
+        keep = np.ones(self.n, dtype=bool)
+        keep[ground] = False
+        self._fixed, self._free = ground, np.flatnonzero(keep)
         if step != "engine" and (lap is None or lap.domain != "points") and ldlt.available():
             # M + tL and the grounded L (its grounded rows and columns replaced by the
             # identity's) are stored on the pattern of L with its whole diagonal: one
@@ -282,8 +283,6 @@ class HeatGeodesics:
             self._heat = ldlt.LDLT(sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape), pattern)
             bar.update()
             bar.set_postfix_str("Poisson factorization")
-            keep = np.ones(self.n, dtype=bool)
-            keep[ground] = False
             vals = np.where(keep[S.indices] & keep[col], S.data, 0.0)
             vals[diag[ground]] = 1.0
             Lg = sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape)

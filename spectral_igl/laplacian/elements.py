@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.csgraph as csgraph
 
 from .._validate import as_mesh_arrays
 
 __all__ = ["row_cross", "element_measures", "mesh_components", "star_adjacency", "mean_value_weights",
-           "cotan_stiffness", "full_mass", "component_labels"]
+           "cotan_stiffness", "full_mass", "pattern_components"]
 
 
 def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -77,13 +78,15 @@ def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
 
 
-def component_labels(n: int, C: np.ndarray) -> np.ndarray:
-    """(n,) int64 connected component of each vertex of the elements ``C``, numbered in the
-    order of their smallest vertex as :class:`~spectral_igl.laplacian.Laplacian` numbers
-    them; a vertex in no element is a component of its own."""
-    from scipy.sparse import csgraph
-
-    return csgraph.connected_components(star_adjacency(n, C), directed=False)[1].astype(np.int64)
+def pattern_components(A) -> tuple[np.ndarray, int]:
+    """(labels (n,) int64, count): the connected components of the graph of the stored
+    entries of the square sparse ``A`` (explicit zeros included, directions ignored),
+    numbered in the order of their smallest vertex, as
+    :attr:`~spectral_igl.laplacian.Laplacian.components`."""
+    A = sp.csr_matrix(A)
+    pattern = sp.csr_matrix((np.ones(A.nnz), A.indices, A.indptr), shape=A.shape)
+    nc, labels = csgraph.connected_components(pattern, directed=False)
+    return labels.astype(np.int64), int(nc)
 
 
 def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
