@@ -204,7 +204,9 @@ def triangle_arrays(V, F, stacklevel: int = 2):
 
     Returns
     -------
-    (V, F) : (n, 3) or (n, 2) float and (k, 3) int64, or None
+    V : (n, 3) or (n, 2) float
+    F : (k, 3) int64
+        The triangles kept. ``None`` in place of the pair for tetrahedra and polygons.
 
     Examples
     --------
