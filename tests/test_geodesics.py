@@ -94,6 +94,46 @@ def test_multiple_sources_and_components():
     np.testing.assert_allclose(d2[:len(V)], d0, atol=1e-10)
 
 
+def _count_calls(monkeypatch, module, name, counts):
+    """Replace ``module.name`` by a wrapper that counts its calls in ``counts[name]``."""
+    fn = getattr(module, name)
+
+    def counted(*args, **kwargs):
+        counts[name] = counts.get(name, 0) + 1
+        return fn(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, counted)
+
+
+def test_from_arrays_one_intrinsic_triangulation_one_analysis(monkeypatch):
+    """From (V, F), the precompute flips the mesh to intrinsic Delaunay once, analyses one
+    sparsity pattern for both factorizations and builds no Laplacian (the default step has
+    its own operators); the distances are those of the same solver on a prebuilt Laplacian,
+    bit for bit, and ``lap`` is the default Laplacian, built on first access. The mesh has a
+    degenerate triangle and an unreferenced vertex: the same warnings as the Laplacian's."""
+    from spectral_igl.laplacian import intrinsic, intrinsic_fem, mesh
+    from spectral_igl.linalg import ldlt
+
+    V, F = icosphere(3)
+    V = np.r_[V, [[5.0, 5.0, 5.0]]]                       # referenced by no triangle
+    F = np.r_[F, [[0, 0, 1]]]                             # a repeated vertex: dropped
+    with pytest.warns(RuntimeWarning) as ref_warnings:
+        lap = sig.laplacian(V, F)
+    ref = HeatGeodesics(lap).compute(3)
+    counts = {}
+    for module, name in [(intrinsic, "intrinsic_delaunay"), (intrinsic_fem, "intrinsic_delaunay"),
+                         (mesh, "make_laplacian"), (ldlt, "Pattern"), (ldlt, "LDLT")]:
+        _count_calls(monkeypatch, module, name, counts)
+    with pytest.warns(RuntimeWarning) as got:
+        hg = HeatGeodesics((V, F))
+    assert sorted(str(w.message) for w in got) == sorted(str(w.message) for w in ref_warnings)
+    assert counts == {"intrinsic_delaunay": 1, "Pattern": 1, "LDLT": 2}
+    d = hg.compute(3)
+    assert np.array_equal(d, ref) and np.isinf(d[-1]) and d[3] == 0.0
+    monkeypatch.undo()
+    assert abs(hg.lap.L - lap.L).max() == 0.0 and np.array_equal(hg.lap.mass, lap.mass)
+
+
 def test_validation():
     V, F = icosphere(1)
     with pytest.raises(ValueError, match="vertex indices"):

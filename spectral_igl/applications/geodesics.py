@@ -9,9 +9,10 @@ import scipy.sparse as sp
 from .._validate import as_flag, as_indices, as_mesh_arrays, as_nonnegative, as_positive, describe
 from ..approx import SpectralOperator
 from ..filters import heat
-from ..laplacian import Laplacian, as_laplacian
+from ..laplacian import Laplacian, as_laplacian, laplacian
+from ..laplacian.elements import element_measures, pattern_components
+from ..laplacian.inputs import as_laplacian_or_triangles
 from ..laplacian.units import optional_time
-from ..laplacian.elements import element_measures
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
                                        intrinsic_parts)
@@ -181,14 +182,22 @@ class HeatGeodesics:
 
     def __init__(self, lap_or_mesh, t: float | None = None, step: str = "intrinsic_delaunay",
                  mollify: float = 1e-6, progress=None):
-        import igl
-
         if not isinstance(step, str) or step not in _STEPS:
             raise ValueError(f"step must be one of {_STEPS}, got {describe(step)}")
         mollify = as_nonnegative(mollify, "mollify")
-        lap = _as_laplacian(lap_or_mesh, ("triangle", "tet", "polygon", "points"))
-        self.lap, self.n, self.mollify = lap, lap.n, float(mollify)
-        self._fans = None
+        self.mollify, self._fans = float(mollify), None
+        # a triangle mesh's arrays need no Laplacian: the intrinsic-Delaunay step builds its
+        # own operators, and the Laplacian is built only if asked for (self.lap)
+        lap = (as_laplacian_or_triangles(lap_or_mesh, "lap_or_mesh") if step == "intrinsic_delaunay"
+               else lap_or_mesh)
+        if isinstance(lap, tuple):
+            self._lap, self._mesh = None, lap
+            self.n, self._components = lap[0].shape[0], None   # components: from the operators
+            self._init_steps(step, t, progress)
+            return
+        lap = _as_laplacian(lap, ("triangle", "tet", "polygon", "points"))
+        self._lap, self._mesh = lap, None
+        self.n, self._components = lap.n, lap.components
         if lap.domain == "polygon":
             # the heat method on the polygon Laplacian's own refinement (every polygon a fan
             # around its virtual vertex), read back on the polygon vertices
@@ -201,18 +210,38 @@ class HeatGeodesics:
                              "method takes step='intrinsic_delaunay' (the default) or 'euler'")
         if lap.domain == "tet" and step == "intrinsic_delaunay":
             step = "euler"
+        self._init_steps(step, t, progress)
+
+    @property
+    def lap(self) -> Laplacian:
+        """The Laplacian of the input: the one given, or, for a triangle mesh given as arrays
+        or a mesh object, :func:`spectral_igl.laplacian` of it with its defaults, built at the
+        first access (the default step does not need it)."""
+        if self._lap is None:
+            with warnings.catch_warnings():   # the mesh's warnings were given at construction
+                warnings.filterwarnings("ignore", r"\d+ vertex/vertices referenced by no element", RuntimeWarning)
+                self._lap = laplacian(*self._mesh)
+        return self._lap
+
+    def _init_steps(self, step, t, progress):
+        """The operators and factorizations of the three steps."""
+        import igl
+
+        lap = self._lap
         self.step = step
         bar = progress_bar(3, "heat geodesics", progress, unit="step")
         bar.set_postfix_str("operators")
-        if lap.domain == "points":
+        if lap is not None and lap.domain == "points":
             gx, gy, self.A, Fi, Lp, self.h = _point_parts(lap)
             self.G = gradient_matrix(gx, gy, Fi, self.n)
             self._hats = (gx, gy, Fi)
             self._dim = 2
             Lh, M = lap.L, sp.diags(lap.mass).tocsr()
         elif step == "intrinsic_delaunay":
-            V, C = lap.data["V"], _cells(lap)
+            V, C = self._mesh if lap is None else (lap.data["V"], _cells(lap))
             gx, gy, self.A, Fi, Lp, M, self.h = intrinsic_parts(V, C, self.mollify)
+            if self._components is None:   # flips keep the components: the mesh's are Lp's
+                self._components = pattern_components(Lp)[0]
             self.G = gradient_matrix(gx, gy, Fi, self.n)
             self._hats = (gx, gy, Fi)
             self._dim = 2
@@ -232,10 +261,11 @@ class HeatGeodesics:
         bar.update()
         bar.set_postfix_str("heat factorization")
         # Poisson solve: ground one vertex per component (the rhs is consistent)
-        ground = np.unique(lap.components, return_index=True)[1]
-        self._fixed = ground
-        self._free = np.setdiff1d(np.arange(self.n), ground)
-        if step != "engine" and lap.domain != "points" and ldlt.available():
+        ground = np.unique(self._components, return_index=True)[1]
+        keep = np.ones(self.n, dtype=bool)
+        keep[ground] = False
+        self._fixed, self._free = ground, np.flatnonzero(keep)
+        if step != "engine" and (lap is None or lap.domain != "points") and ldlt.available():
             # M + tL and the grounded L (its grounded rows and columns replaced by the
             # identity's) are stored on the pattern of L with its whole diagonal: one
             # ordering and symbolic analysis, two numeric LDLᵀ factorizations. The ordering
@@ -253,8 +283,6 @@ class HeatGeodesics:
             self._heat = ldlt.LDLT(sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape), pattern)
             bar.update()
             bar.set_postfix_str("Poisson factorization")
-            keep = np.ones(self.n, dtype=bool)
-            keep[ground] = False
             vals = np.where(keep[S.indices] & keep[col], S.data, 0.0)
             vals[diag[ground]] = 1.0
             Lg = sp.csc_matrix((vals, S.indices, S.indptr), shape=S.shape)
@@ -310,7 +338,7 @@ class HeatGeodesics:
         if len(self._fixed) == 1:                       # one connected component
             phi -= phi[src].mean()
             return phi
-        comps = self.lap.components
+        comps = self._components
         out = np.full(self.n, np.inf)
         for c in np.unique(comps[src]):
             mask = comps == c
@@ -326,7 +354,7 @@ class HeatGeodesics:
         if self._fans is not None:
             return self._fans.compute_each(src, block)[:self.n]
         out = np.empty((self.n, src.size))
-        comps = self.lap.components
+        comps = self._components
         for a in range(0, src.size, block):
             s = src[a:a + block]
             k = s.size

@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.csgraph as csgraph
 
 from .._validate import describe
 from .cache import Cache
+from .elements import pattern_components
 
 __all__ = ["Laplacian", "make_laplacian", "check_laplacian", "drop_negative_weights"]
 
@@ -340,8 +340,5 @@ def make_laplacian(L, B, domain: str = "matrix", data: dict | None = None,
                          "sign of libigl's cotmatrix (negative semi-definite); pass -L")
     if np.any(B.diagonal() <= 0):
         raise ValueError(f"B must be positive definite; {int(np.sum(B.diagonal() <= 0))} diagonal entries are <= 0")
-    pattern = L if adjacency is None else sp.csr_matrix(adjacency)
-    pattern = sp.csr_matrix((np.ones(pattern.nnz), pattern.indices, pattern.indptr), shape=L.shape)
-    nc, labels = csgraph.connected_components(pattern, directed=False)
-    return Laplacian(L=L, B=B, domain=domain, data=dict(data or {}),
-                     components=labels.astype(np.int64), n_components=int(nc))
+    labels, nc = pattern_components(L if adjacency is None else adjacency)
+    return Laplacian(L=L, B=B, domain=domain, data=dict(data or {}), components=labels, n_components=nc)

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.csgraph as csgraph
 
 from .._validate import as_mesh_arrays
 
 __all__ = ["row_cross", "element_measures", "mesh_components", "star_adjacency", "mean_value_weights",
-           "cotan_stiffness", "full_mass"]
+           "cotan_stiffness", "full_mass", "pattern_components"]
 
 
 def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -75,6 +76,17 @@ def star_adjacency(n: int, C: np.ndarray) -> sp.csr_matrix:
     i = np.repeat(C[:, 0], k - 1)
     j = C[:, 1:].ravel()
     return sp.csr_matrix((np.ones(i.size), (i, j)), shape=(n, n))
+
+
+def pattern_components(A) -> tuple[np.ndarray, int]:
+    """(labels (n,) int64, count): the connected components of the graph of the stored
+    entries of the square sparse ``A`` (explicit zeros included, directions ignored),
+    numbered in the order of their smallest vertex, as
+    :attr:`~spectral_igl.laplacian.Laplacian.components`."""
+    A = sp.csr_matrix(A)
+    pattern = sp.csr_matrix((np.ones(A.nnz), A.indices, A.indptr), shape=A.shape)
+    nc, labels = csgraph.connected_components(pattern, directed=False)
+    return labels.astype(np.int64), int(nc)
 
 
 def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:

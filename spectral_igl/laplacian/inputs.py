@@ -21,10 +21,10 @@ import numpy as np
 
 from .._validate import as_mesh_arrays, describe, is_mesh_object
 from ._operator import Laplacian
-from .mesh import laplacian
+from .mesh import laplacian, triangle_arrays
 from .points import point_cloud_laplacian
 
-__all__ = ["as_laplacian"]
+__all__ = ["as_laplacian", "as_laplacian_or_triangles"]
 
 
 def as_laplacian(x, name: str = "lap", **options) -> Laplacian:
@@ -66,15 +66,44 @@ def as_laplacian(x, name: str = "lap", **options) -> Laplacian:
     >>> as_laplacian((V, F), mass="full").lumped
     False
     """
+    out = _laplacian_or_arrays(x, name)
+    return laplacian(*out, **options) if isinstance(out, tuple) else out
+
+
+def as_laplacian_or_triangles(x, name: str = "lap"):
+    """:func:`as_laplacian`, except that a triangle mesh comes back as its arrays ``(V, F)``,
+    validated and cleaned as :func:`spectral_igl.laplacian` reads them
+    (:func:`~spectral_igl.laplacian.mesh.triangle_arrays`), and no Laplacian is built.
+
+    For callers that build their own operators on a triangle mesh given as arrays or as a
+    mesh object; a Laplacian, a tetrahedral or polygon mesh and a point cloud come back as
+    :func:`as_laplacian` returns them.
+
+    Examples
+    --------
+    >>> from spectral_igl.data_generators import icosphere
+    >>> V, F = icosphere(1)
+    >>> Vc, Fc = as_laplacian_or_triangles((V, F))
+    >>> Fc.shape, type(as_laplacian_or_triangles(as_laplacian((V, F)))).__name__
+    ((80, 3), 'Laplacian')
+    """
+    out = _laplacian_or_arrays(x, name)
+    if not isinstance(out, tuple):
+        return out
+    return triangle_arrays(*out, stacklevel=3) or laplacian(*out)
+
+
+def _laplacian_or_arrays(x, name: str):
+    """``x`` itself (a Laplacian), a point-cloud Laplacian, or the ``(V, C)`` arrays of a mesh."""
     if isinstance(x, Laplacian):
         return x
     if isinstance(x, (tuple, list)) and len(x) == 2:
-        return laplacian(*x, **options)
+        return tuple(x)
     if is_mesh_object(x):
         V, C = as_mesh_arrays(x, name=name, need_cells=False)
         if C is None:
             return point_cloud_laplacian(V)
-        return laplacian(V, C, **options)
+        return V, C
     hint = ""
     if isinstance(x, np.ndarray) and x.ndim == 2:
         hint = (" (an array alone is ambiguous: pass (V, F) as one tuple for a mesh, or "

@@ -14,7 +14,7 @@ from .polygon import polygon_laplacian
 
 __all__ = ["laplacian", "clean_mesh", "clean_mesh_with_measures", "MASSES", "square", "mass_matrix", "full_mass",
            "star_adjacency", "element_measures", "mesh_components", "cotan_stiffness",
-           "mean_value_weights"]
+           "mean_value_weights", "triangle_arrays"]
 
 _WEIGHTS = ("auto", "cotan", "intrinsic_delaunay", "uniform", "mean_value")
 _ELEMENTS = ("auto", "triangle", "tet", "polygon")
@@ -169,6 +169,60 @@ def _element_kind(V, F, elements: str):
     return ("cells", F)
 
 
+def _cleaned_cells(V, C, stacklevel: int):
+    """:func:`clean_mesh_with_measures` of the cells ``C`` and the (n,) bool of the vertices
+    they reference, with :func:`laplacian`'s warnings for dropped elements and unreferenced
+    vertices (``stacklevel`` as :func:`warnings.warn` counts from the caller of this function)."""
+    V, C, dropped, meas = clean_mesh_with_measures(V, C)
+    n = V.shape[0]
+    if dropped:
+        warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
+                      RuntimeWarning, stacklevel=stacklevel + 1)
+    referenced = np.zeros(n, dtype=bool)
+    referenced[C.ravel()] = True
+    n_unref = int(n - np.count_nonzero(referenced))
+    if n_unref:
+        warnings.warn(f"{n_unref} vertex/vertices referenced by no element: each is kept as an "
+                      "isolated component with the mean vertex mass", RuntimeWarning, stacklevel=stacklevel + 1)
+    return V, C, meas, referenced
+
+
+def triangle_arrays(V, F, stacklevel: int = 2):
+    """``(V, F)`` validated and cleaned as :func:`laplacian` with its defaults reads them, when
+    it reads them as a triangle mesh; ``None`` for tetrahedra and polygons.
+
+    For callers that build their own operators on a triangle mesh and need no
+    :class:`Laplacian`: the same checks, the same dropped degenerate triangles and the
+    same warnings (dropped triangles, unreferenced vertices) as :func:`laplacian`.
+
+    Parameters
+    ----------
+    V : (n, 3) or (n, 2) float
+    F : (m, 3) int, or any cells :func:`laplacian` takes
+    stacklevel : int
+        Where the warnings point, counted as :func:`warnings.warn` does from the caller.
+
+    Returns
+    -------
+    V : (n, 3) or (n, 2) float
+    F : (k, 3) int64
+        The triangles kept. ``None`` in place of the pair for tetrahedra and polygons.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> _, F = triangle_arrays(V, [[0, 1, 2], [1, 3, 2]])
+    >>> F.tolist(), triangle_arrays(V, np.array([[0, 1, 3, 2]])) is None
+    ([[0, 1, 2], [1, 3, 2]], True)
+    """
+    kind, C = _element_kind(V, F, "auto")
+    if kind == "polygon" or np.ndim(C) != 2 or np.shape(C)[1] != 3:
+        return None
+    V, C, _, _ = _cleaned_cells(V, C, stacklevel + 1)
+    return V, C
+
+
 def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: str = "auto",
               positive: bool | None = None) -> Laplacian:
     r"""Laplacian of a triangle mesh ``(V, F)``, tetrahedral mesh ``(V, T)`` or polygon mesh.
@@ -301,11 +355,8 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
         raise ValueError(f"elements='tet' needs an (m, 4) array, got shape {np.shape(F[1])}")
     if elements == "triangle" and np.shape(F[1])[1:] != (3,):
         raise ValueError(f"elements='triangle' needs an (m, 3) array, got shape {np.shape(F[1])}")
-    V, C, dropped, meas = clean_mesh_with_measures(V, F[1])
+    V, C, meas, referenced = _cleaned_cells(V, F[1], stacklevel=2)
     n = V.shape[0]
-    if dropped:
-        warnings.warn(f"dropped {dropped} degenerate element(s) (zero measure or repeated vertex)",
-                      RuntimeWarning, stacklevel=2)
     if positive is None:
         positive = weights == "auto" and C.shape[1] == 3
     if weights == "auto":
@@ -315,12 +366,7 @@ def laplacian(V, F=None, weights: str = "auto", mass: str = "lumped", elements: 
     if positive:
         L, clamped = drop_negative_weights(L)
     B = square(mass_matrix(V, C, mass, meas), n)
-    referenced = np.zeros(n, dtype=bool)
-    referenced[C.ravel()] = True
-    n_unref = int(n - referenced.sum())
-    if n_unref:
-        warnings.warn(f"{n_unref} vertex/vertices referenced by no element: each is kept as an "
-                      "isolated component with the mean vertex mass", RuntimeWarning, stacklevel=2)
+    if not referenced.all():
         mean_mass = float(np.asarray(B.sum(axis=1)).ravel()[referenced].mean())
         B = (B + sp.diags(np.where(referenced, 0.0, mean_mass))).tocsr()
     domain = "triangle" if C.shape[1] == 3 else "tet"
