@@ -14,8 +14,8 @@ CPU spent divided by the cores, whichever is larger, plus the cluster's start an
 
 The row "2 plain loops in parallel" is the machine's ceiling for that split: the shapes
 each worker of the 2-worker run computed, each set in a plain loop in its own fresh
-process, both at once; their job CPU is compared with the same shapes' in the loop run
-alone (two busy processes share the caches, memory bandwidth and clock of the machine).
+process, both at once; their CPU is compared with each set's run alone in a fresh process
+just before (two busy processes share the caches, memory bandwidth and clock).
 
 The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
 many small shapes: (wall − cluster start − time inside the tasks / workers) / shapes.
@@ -204,11 +204,14 @@ def speed_table(paths, tmp):
 
 def ceiling(paths, split, per_shape, loop_cpu, cores):
     """The row "two plain loops in parallel": the shapes of each worker of the last run, each
-    in a plain loop in its own process, both at once; and the largest shape's share."""
+    in a plain loop in its own process, both at once, against each set alone in a fresh
+    process just before (the same conditions); and the largest shape's share."""
     by_name = {Path(p).stem: p for p in paths}
-    wall, res = parallel_loops([[by_name[k] for k in names] for names in split])
-    solo = [sum(per_shape[k][0] for k in names) for names in split]
-    solo_job = sum(per_shape[k][1] for names in split for k in names)
+    halves = [[by_name[k] for k in names] for names in split]
+    alone = [parallel_loops([half])[1][0] for half in halves]
+    wall, res = parallel_loops(halves)
+    solo = [r["cpu"] for r in alone]
+    solo_job = sum(r["job_cpu"] for r in alone)
     busiest = max(r["cpu"] for r in res)
     cpu = sum(r["cpu"] for r in res)
     print(f"| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
