@@ -216,15 +216,17 @@ def ceiling(paths, split, per_shape, loop_cpu, cores):
     cpu = sum(r["cpu"] for r in res)
     print(f"| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
           f"{60 * len(paths) / wall:.0f} | {cpu:.1f} / {busiest:.1f} / | "
-          f"{sum(r['job_cpu'] for r in res) / solo_job:.2f} | {busiest:.1f} / | {loop_cpu / busiest:.2f} / | |")
+          f"{sum(r['job_cpu'] for r in res) / solo_job:.2f} | {busiest:.1f} / | "
+          f"{loop_cpu / busiest:.2f} / | |")
     print("\nparallel loops: CPU of each half " + ", ".join(
         f"{r['cpu']:.2f} s against {s:.2f} s alone ({r['cpu'] / s:.2f}x)" for r, s in zip(res, solo))
-        + f"; a fresh process's imports before the first shape {np.mean([r['import_cpu'] for r in res]):.2f} s "
-          "CPU (the loop rows exclude them; each worker pays them)")
+        + "; a fresh process's imports before the first shape "
+        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; each worker pays them)")
     name, (big, _) = max(per_shape.items(), key=lambda kv: kv[1][0])
     bound = max(big, loop_cpu / cores)
-    print(f"largest shape: {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU ({100 * big / loop_cpu:.0f} %): "
-          f"on {cores} workers at best {bound:.2f} s, a speed-up of at most {loop_cpu / bound:.2f}")
+    print(f"largest shape: {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
+          f"({100 * big / loop_cpu:.0f} %): on {cores} workers at best {bound:.2f} s, a speed-up of at most "
+          f"{loop_cpu / bound:.2f}")
 
 
 def overhead(n_small, tmp):
