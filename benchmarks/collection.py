@@ -12,6 +12,11 @@ in a worker and in the loop; "predicted on a quiet machine" is the wall time the
 accounting implies on ``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all
 CPU spent divided by the cores, whichever is larger, plus the cluster's start and stop.
 
+The row "2 plain loops in parallel" is the machine's ceiling for that split: the shapes
+each worker of the 2-worker run computed, each set in a plain loop in its own fresh
+process, both at once; their CPU is compared with each set's run alone in a fresh process
+just before (two busy processes share the caches, memory bandwidth and clock).
+
 The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
 many small shapes: (wall − cluster start − time inside the tasks / workers) / shapes.
 
@@ -63,18 +68,60 @@ def client_cpu() -> float:
 
 
 def plain_loop(paths, fn):
-    """(wall, CPU, CPU of the job alone) of read + Laplacian + job over ``paths``."""
+    """(wall, CPU, CPU of the job alone, {name: (CPU of read + Laplacian + job, of the job)})
+    over ``paths``."""
     import spectral_igl as sig
     from spectral_igl.io import read_mesh
 
-    t, c, job_cpu = time.perf_counter(), time.process_time(), 0.0
+    t, c, job_cpu, per_shape = time.perf_counter(), time.process_time(), 0.0, {}
     for p in paths:
+        c0 = time.process_time()
         V, C = read_mesh(p)
         lap = sig.laplacian(V, C)
         c1 = time.process_time()
         fn(Path(p).stem, lap)
-        job_cpu += time.process_time() - c1
-    return time.perf_counter() - t, time.process_time() - c, job_cpu
+        c2 = time.process_time()
+        job_cpu += c2 - c1
+        per_shape[Path(p).stem] = (c2 - c0, c2 - c1)
+    return time.perf_counter() - t, time.process_time() - c, job_cpu, per_shape
+
+
+# a plain loop in a fresh process: imports, says "ready", waits for "go", runs, prints JSON
+_LOOP = """
+import json, sys, time
+c0 = time.process_time()
+sys.path.insert(0, sys.argv[1])
+from collection import hks_relative, plain_loop
+import spectral_igl
+from spectral_igl.io import read_mesh
+paths = json.loads(sys.stdin.readline())
+print(json.dumps({"import_cpu": time.process_time() - c0}), flush=True)
+sys.stdin.readline()
+wall, cpu, job_cpu, per_shape = plain_loop(paths, hks_relative)
+print(json.dumps(dict(wall=wall, cpu=cpu, job_cpu=job_cpu)), flush=True)
+"""
+
+
+def parallel_loops(halves):
+    """Plain loops over each list of ``halves`` at once, one fresh process each (started and
+    imported first, then released together): what the machine gives two busy processes."""
+    import json
+
+    procs = [subprocess.Popen([sys.executable, "-c", _LOOP, str(Path(__file__).parent)],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True) for _ in halves]
+    for proc, half in zip(procs, halves):
+        proc.stdin.write(json.dumps(half) + "\n")
+        proc.stdin.flush()
+    ready = [json.loads(proc.stdout.readline()) for proc in procs]
+    t = time.perf_counter()
+    for proc in procs:
+        proc.stdin.write("go\n")
+        proc.stdin.flush()
+    results = [dict(json.loads(proc.stdout.readline()), **r) for proc, r in zip(procs, ready)]
+    wall = time.perf_counter() - t
+    for proc in procs:
+        proc.wait()
+    return wall, results
 
 
 def cluster_start(workers):
@@ -91,7 +138,8 @@ def cluster_start(workers):
 
 
 def task_times(out):
-    """Per-shape timings of a store: sums of wall and CPU inside the tasks, CPU per worker."""
+    """Per-shape timings of a store: sums of wall and CPU inside the tasks, CPU per worker,
+    and the shapes each worker computed."""
     from spectral_igl import collection
 
     res = collection.load(out, arrays=False).results
@@ -99,11 +147,13 @@ def task_times(out):
     cpu = sum(r.meta["timings"]["cpu"] for r in res.values())
     job_cpu = sum(r.meta["timings"].get("compute_cpu", 0.0) for r in res.values())
     compute = sum(r.meta["timings"].get("compute", 0.0) for r in res.values())
-    per_worker = {}
-    for r in res.values():
+    per_worker, split = {}, {}
+    for name, r in res.items():
         key = (r.meta["host"], r.meta["pid"])
         per_worker[key] = per_worker.get(key, 0.0) + r.meta["timings"]["cpu"]
-    return dict(inside=inside, cpu=cpu, job_cpu=job_cpu, compute=compute, per_worker=per_worker, n=len(res))
+        split.setdefault(key, []).append(name)
+    return dict(inside=inside, cpu=cpu, job_cpu=job_cpu, compute=compute, per_worker=per_worker,
+                split=list(split.values()), n=len(res))
 
 
 def timed_run(inputs, job, out, workers, **kw):
@@ -130,7 +180,7 @@ def speed_table(paths, tmp):
     cores = os.cpu_count() or 1
     job = Job.function(hks_relative)
     print(f"load average before: {load_avg()}")
-    lw, lc, ljob = plain_loop(paths, hks_relative)
+    lw, lc, ljob, per_shape = plain_loop(paths, hks_relative)
     n = len(paths)
     print("\n| | wall (s) | shapes per minute | CPU (s): tasks / busiest worker / client | job CPU in-task / loop "
           f"| predicted on {cores} quiet cores, without / with the cluster start (s) | predicted speed-up "
@@ -147,8 +197,36 @@ def speed_table(paths, tmp):
               f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
               f"{pred:.1f} / {pred + updown:.1f} | {lc / pred:.2f} / {lc / (pred + updown):.2f} | "
               f"{r['rerun']:.2f} |")
+    ceiling(paths, r["split"], per_shape, lc, cores)
     print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; cluster start + stop measured apart; "
           f"load average after: {load_avg()}")
+
+
+def ceiling(paths, split, per_shape, loop_cpu, cores):
+    """The row "two plain loops in parallel": the shapes of each worker of the last run, each
+    in a plain loop in its own process, both at once, against each set alone in a fresh
+    process just before (the same conditions); and the largest shape's share."""
+    by_name = {Path(p).stem: p for p in paths}
+    halves = [[by_name[k] for k in names] for names in split]
+    alone = [parallel_loops([half])[1][0] for half in halves]
+    wall, res = parallel_loops(halves)
+    solo = [r["cpu"] for r in alone]
+    solo_job = sum(r["job_cpu"] for r in alone)
+    busiest = max(r["cpu"] for r in res)
+    cpu = sum(r["cpu"] for r in res)
+    print(f"| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
+          f"{60 * len(paths) / wall:.0f} | {cpu:.1f} / {busiest:.1f} / | "
+          f"{sum(r['job_cpu'] for r in res) / solo_job:.2f} | {busiest:.1f} / | "
+          f"{loop_cpu / busiest:.2f} / | |")
+    print("\nparallel loops: CPU of each half " + ", ".join(
+        f"{r['cpu']:.2f} s against {s:.2f} s alone ({r['cpu'] / s:.2f}x)" for r, s in zip(res, solo))
+        + "; a fresh process's imports before the first shape "
+        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; each worker pays them)")
+    name, (big, _) = max(per_shape.items(), key=lambda kv: kv[1][0])
+    bound = max(big, loop_cpu / cores)
+    print(f"largest shape: {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
+          f"({100 * big / loop_cpu:.0f} %): on {cores} workers at best {bound:.2f} s, a speed-up of at most "
+          f"{loop_cpu / bound:.2f}")
 
 
 def overhead(n_small, tmp):
@@ -296,7 +374,8 @@ def loopback(paths, tmp, workers=3):
     from spectral_igl.collection import Job
 
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[1]),
-                                                       os.environ.get("PYTHONPATH", "")]))
+                                                       os.environ.get("PYTHONPATH", "")]),
+               DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED="False")   # as a local cluster's workers
     sched_file, log = tmp / "scheduler.json", open(tmp / "cluster.log", "w")
     procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                      "--scheduler-file", str(sched_file)], env, log)]

@@ -357,6 +357,28 @@ def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
     assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
 
 
+def _worker_state(name, lap):
+    """Tasks the worker running this shape holds unfinished, and whether it samples stacks."""
+    from distributed import get_worker
+
+    w = get_worker()
+    held = sum(ts.state in ("waiting", "ready", "constrained", "executing") for ts in w.state.tasks.values())
+    return np.array([held, "profile" in w.periodic_callbacks], dtype=float)
+
+
+def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
+    """A worker gets its next task only when it has finished one (a task queued on a busy
+    worker cannot move to an idle one), and a local cluster's workers run no sampling profiler."""
+    V, F = icosphere(0)
+    shapes = {f"s{i:02d}": (V * (1 + 0.01 * i), F) for i in range(12)}     # 4 batches of 3
+    s = collection.run(shapes, Job.function(_worker_state), tmp_path / "w.zarr", workers=1, progress=False)
+    assert s.ok and sorted(s.done) == sorted(shapes)
+    states = np.array([r["result"] for r in collection.load(tmp_path / "w.zarr").results.values()])
+    assert states.shape == (12, 2)
+    assert np.all(states[:, 0] == 1), states[:, 0]
+    assert not np.any(states[:, 1])
+
+
 def _hks_slowly(name, lap):
     """HKS at two times, a little slower than it needs to be, so that a run lasts a few seconds."""
     time.sleep(0.15)

@@ -45,6 +45,7 @@ LAZY_EXTRAS = {
     "pytetwild": "only tetrahedralize() needs it, and it is slow to import",
     "meshio": "only formats libigl does not read",
     "distributed": "only a collection run on a cluster", "zarr": "only a collection's store",
+    "dask": "only a local cluster's worker settings (distributed's own dependency)",
     "tqdm": "only a requested progress bar",
     "IPython": "only a plot displayed by IPython (a notebook), which is running",
     "cholespy": "a factorization back end chosen at run time",

@@ -243,6 +243,15 @@ def estimate_nnz(n, C) -> int:
     return int(n + 2 * edges)
 
 
+def _nnz_bound(n, C) -> int:
+    """An upper bound of :func:`estimate_nnz` without counting edges: every cell's vertex
+    pairs taken as distinct edges."""
+    if C is None:
+        return estimate_nnz(n, C)
+    k = np.asarray(C).shape[1]
+    return int(n + k * (k - 1) * len(C))
+
+
 def estimate_memory(n: int, nnz: int, domain: str = "triangle", job: Job | None = None) -> int:
     r"""Estimated peak memory of one shape's job, in bytes.
 
@@ -392,7 +401,10 @@ def _compute(shape: Shape, job: Job, meta: dict, limit):
         record["mesh_hash"] = _digest(np.asarray(V, dtype=float),
                                       None if C is None else np.asarray(C, dtype=np.int64))
         domain = "points" if C is None else ("tet" if np.asarray(C).shape[1] == 4 else "triangle")
-        est = estimate_memory(len(V), estimate_nnz(len(V), C), domain, job)
+        # the estimate grows with nnz: count the edges only when the cheap bound is above the limit
+        est = estimate_memory(len(V), _nnz_bound(len(V), C), domain, job)
+        if limit is not None and est > limit:
+            est = estimate_memory(len(V), estimate_nnz(len(V), C), domain, job)
         record["memory_estimate_bytes"] = est
         timings["read"] = time.perf_counter() - t0
         if limit is not None and est > limit:
@@ -402,7 +414,8 @@ def _compute(shape: Shape, job: Job, meta: dict, limit):
         lap = _laplacian(V, C, meta.get("laplacian", {}))
         timings["laplacian"] = time.perf_counter() - t
         record.update(n=lap.n, nnz=int(lap.L.nnz), domain=lap.domain,
-                      n_components=int(lap.n_components))
+                      n_components=int(lap.n_components),
+                      memory_estimate_bytes=estimate_memory(lap.n, int(lap.L.nnz), domain, job))
         t, c = time.perf_counter(), time.process_time()
         arrays, bounds = job(shape.name, lap)
         timings["compute"] = time.perf_counter() - t
@@ -493,12 +506,20 @@ def _as_job(job) -> Job:
                     f"fn(name, lap), got {describe(job)}")
 
 
+#: dask settings of the workers of a local cluster: no sampling profiler (it interrupts the
+#: task thread every 10 ms; about 10 % of the CPU of an HKS task, measured)
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+
+
 def _local_cluster(n, memory_limit, silence):
-    """A LocalCluster of ``n`` single-threaded worker processes."""
+    """A LocalCluster of ``n`` single-threaded worker processes, with :data:`WORKER_CONFIG`
+    (a nanny hands its configuration to the worker it starts or restarts)."""
+    import dask
     from distributed import LocalCluster
 
-    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, memory_limit=memory_limit,
-                        dashboard_address=None, silence_logs=silence)
+    with dask.config.set(WORKER_CONFIG):
+        return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                            memory_limit=memory_limit, dashboard_address=None, silence_logs=silence)
 
 
 def _connect(scheduler, workers, memory_limit, silence):
@@ -744,7 +765,15 @@ def _record_lost(out, s, meta, err, summary):
 
 
 def _dispatch(client, tasks, job, out, limit, retries, slots, summary, bar, too_large):
-    """Run ``tasks`` with at most ``2 * slots + 2`` in flight, as results arrive.
+    """Run ``tasks`` with at most ``slots`` in flight, as results arrive.
+
+    One task per worker thread: dask assigns a submitted task to a worker at once (each
+    task is its own task group, so the scheduler does not queue it), and a task waiting
+    on a busy worker cannot move to one that has become idle. With more in flight the
+    first large shapes were dealt out in turn and one worker could be left with two of
+    them while the other ran out of work; with one each, a worker gets its next task when
+    it finishes one, largest first, which balances to within the last (smallest) task.
+    The cost is one scheduler round trip per task, amortised by the batches.
 
     A task that failed (its worker died ``allowed-failures`` times, or the store could not
     be written) is split into single shapes and resubmitted once; a single shape that
@@ -753,7 +782,7 @@ def _dispatch(client, tasks, job, out, limit, retries, slots, summary, bar, too_
     from distributed import as_completed
 
     queue = list(reversed(tasks))       # pop() takes the largest first
-    window = 2 * max(slots, 1) + 2
+    window = max(slots, 1)
     running = {}
     ac = as_completed()
 
