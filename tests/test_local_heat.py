@@ -222,3 +222,29 @@ def test_sparse_heat_kernel_refuses_dense_and_bad_arguments():
     V, F = icosphere(2)
     with pytest.raises(ValueError, match="positive=True"):
         sig.sparse_heat_kernel(sig.laplacian(V, F, mass="full"), 1e-3)
+
+
+@pytest.mark.parametrize("name, t", [("grid", 1e-4), ("two", 2e-4), ("icosphere", 5e-5)])
+def test_sparse_diffusion_distance_every_stored_pair(name, t):
+    lap, w, X = _exact(name)
+    exact_K = (X * np.exp(-t * w)) @ X.T
+    diag = np.diag(exact_K)
+    exact = np.sqrt(np.maximum(diag[:, None] + diag[None, :] - 2.0 * exact_K, 0.0))
+    D, info = sig.sparse_diffusion_distance(lap, t, return_info=True)
+    assert info["bound_kind"] == "proof" and abs(D - D.T).max() == 0
+    K = sig.sparse_heat_kernel(lap, t)
+    assert np.array_equal(D.indices, K.indices) and np.array_equal(D.indptr, K.indptr)
+    rows = np.repeat(np.arange(lap.n), np.diff(D.indptr))
+    got, err = D.data, info["abs_error"].data.astype(float)
+    # the reference's rounding of d^2 (1e-12 of the peak) is up to its square root in d
+    slack = np.sqrt(REFERENCE * diag.max())
+    assert np.all(np.abs(got - exact[rows, D.indices]) <= err + slack)
+    assert np.all(np.abs(info["hks"] - diag) <= info["hks_error"] + REFERENCE * diag)
+    # not vacuous: off the diagonal the bound is a small share of the distance
+    off = rows != D.indices
+    assert np.median(err[off] / got[off]) < 1e-3
+    # an unstored pair is as far as the kernel's dropped entries say
+    stored = K.toarray() > 0
+    low = diag[:, None] + diag[None, :] - 2.0 * np.minimum.outer(info["dropped_max"], info["dropped_max"])
+    assert np.all((exact ** 2 >= low - info["hks_error"][:, None] - info["hks_error"][None, :]
+                   - REFERENCE * diag.max())[~stored])
