@@ -262,14 +262,19 @@ def _heat_derivative(lap, t, K, E):
 
 
 
-def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 64,
+def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 32,
                        return_info: bool = False, time_unit: str = "absolute"):
     r"""The whole heat kernel matrix :math:`K_t = e^{-t\tilde L}B^{-1}` as a certified sparse matrix.
 
     Every column :math:`K_t(:, s)` is solved on a region around its source, as by
     :func:`local_heat_kernel`, by blocks of ``block`` neighbouring sources that share one
-    region and one block of sparse products; every entry at or above ``threshold`` times its
-    column's peak is kept, and what is dropped is bounded, entry by entry and in mass.
+    region; the Dirichlet operators of the regions of a few thousand sources are stacked into
+    one block-diagonal operator, so that one series of sparse products solves them all
+    (:func:`~spectral_igl.approx.region.dirichlet_heat_blocks`). Every entry at or above
+    ``threshold`` times its column's peak is kept, and what is dropped is bounded, entry by
+    entry and in mass. Column i of K is the diffusion basis function :math:`K_t e_i` of vertex
+    i, its diagonal the heat kernel signature (:func:`sparse_diffusion_distance` reads the
+    diffusion distances off the same matrix).
 
     Parameters
     ----------
@@ -313,11 +318,14 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     :math:`(K_t)_{ij}` is the discrete kernel :math:`k_t(x_i, x_j)`. A column c of the computed
     matrix C holds :math:`u_{ic}` (the region's Dirichlet kernel, see :func:`local_heat_kernel`)
     where :math:`u_{ic} \ge` ``threshold`` :math:`\max_i u_{ic}`, with
-    :math:`|u_{ic} - (K_t)_{ic}| \le \beta_{ic} = e_{ic} + m_c/B_{ii}`. Then
-    :math:`K = \max(C, C^\top)` entrywise (a dropped entry counting 0): each stored entry is
-    the larger of the computed values available for :math:`(K_t)_{ij} = (K_t)_{ji}`, within the
-    larger of their bounds (if :math:`a \ge b` both bracket the truth, :math:`|a - k| \le
-    \beta_a`), stored rounded up in float32. Column c drops entries of its region with
+    :math:`|u_{ic} - (K_t)_{ic}| \le \beta_{ic} = e_{ic} + m_c/B_{ii}`, where the region
+    solver's bound is :math:`e_{ic} = \rho_c u_{ic} + a_c` (a relative rounding and an
+    additive truncation per column). Then :math:`K = \max(C, C^\top)` entrywise (a dropped
+    entry counting 0): each stored entry is the larger of the computed values available for
+    :math:`(K_t)_{ij} = (K_t)_{ji}`, and since each column's bound grows with the value, both
+    columns' bounds evaluated at :math:`K_{ij}` bound it:
+    :math:`E_{ij} = \max(\rho_j K_{ij} + a_j + m_j/B_{ii},\ \rho_i K_{ij} + a_i + m_i/B_{jj})`,
+    stored rounded up in float32. Column c drops entries of its region with
     :math:`u_{ic} + e_{ic} \le \texttt{cut}_c` and every vertex outside it, so a dropped
     :math:`(K_t)_{ic} \le \texttt{cut}_c + m_c/\min_i B_{ii}` = ``dropped_max``, and
     their B-weighted sum is at most
@@ -591,7 +599,7 @@ def _entry_bounds(K, mass, rel, add, lost):
     return sp.csr_matrix((out, K.indices, K.indptr), shape=K.shape)
 
 
-def sparse_diffusion_distance(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 16,
+def sparse_diffusion_distance(lap: Laplacian, t: float, threshold: float = 1e-8, tol: float = 1e-8, block: int = 32,
                               return_info: bool = False, time_unit: str = "absolute"):
     r"""Diffusion distances at time t between every pair that the certified sparse heat kernel
     stores, with a proved bound of each.
