@@ -375,9 +375,11 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
 
 
 #: sources whose regions one stacked series solves at once in :func:`sparse_heat_kernel`
-BATCH = 4096
+BATCH = 2048
+#: largest stacked series (regions' rows times sources per group) before a batch is split
+STACK_LIMIT = 1 << 24
 #: stored entries of K per row block of its symmetric assembly
-ASSEMBLY_CHUNK = 1 << 22
+ASSEMBLY_CHUNK = 1 << 21
 
 
 def _context(lap, t, threshold, tol):
@@ -426,6 +428,10 @@ def _solve_batch(ctx, batch, pieces, per, queue):
     size = ctx["count"][label]
     keys, roff = grow_regions(ctx["L"], ctx["h2"], sources, offsets, radii,
                               np.maximum((MAX_FRACTION * size).astype(np.int64), 1), labels)
+    if len(batch) > 1 and keys.size * max(g.size for g, _, _ in batch) > STACK_LIMIT:
+        # regions as large as their components (large t): fewer groups at a time
+        half = len(batch) // 2
+        return _solve_batch(ctx, batch[:half], pieces, per, queue) + _solve_batch(ctx, batch[half:], pieces, per, queue)
     # the groups in decreasing order of their regions' rates (each stops at its own terms)
     rate = np.maximum.reduceat(1.0 / ctx["h2"][keys % lap.n], roff[:-1])
     order = np.argsort(-rate, kind="stable")
@@ -558,7 +564,8 @@ def _symmetric(n, pieces):
         lo, hi = int(A.indptr[a]), int(A.indptr[b])
         mine = sp.csr_matrix((A.data[lo:hi], A.indices[lo:hi], A.indptr[a:b + 1] - lo), shape=(b - a, n))
         part = mine.maximum(sp.csr_matrix(A[:, a:b].T))
-        parts.append((np.diff(part.indptr), part.indices.astype(np.int32, copy=False), part.data))
+        # copies: maximum's arrays are views of buffers sized for both operands
+        parts.append((np.diff(part.indptr), part.indices.astype(np.int32), part.data.copy()))
         del mine, part
     del A
     counts = np.concatenate([p[0] for p in parts])
