@@ -517,7 +517,7 @@ def _keep(ctx, keys, roff, u, err, sources, group, col, done, lost, pieces, per)
     top = np.where(keep, 0.0, u + err)           # a dropped entry of the region, from above
     cut = np.maximum.reduceat(top, roff[:-1], axis=0)[group, col]
     top *= mass[verts][:, None]
-    grow = np.array([1.0 + _gamma(int(r) + 2) for r in rsize])
+    grow = 1.0 + _gamma(rsize + 2.0)
     dropped = (np.add.reduceat(top, roff[:-1], axis=0) * grow[:, None])[group, col]
     min_mass = ctx["smallest"][ctx["labels"][sources]]
     s = sources[done]
@@ -537,10 +537,8 @@ def _by_columns(n, pieces):
     counts = np.zeros(n, dtype=np.int64)
     for src, count, _, _ in pieces:
         counts[src] = count
-    nnz = int(counts.sum())
-    itype = np.int32 if nnz < 2 ** 31 else np.int64
-    indptr = np.zeros(n + 1, dtype=itype)
-    np.cumsum(counts, out=indptr[1:])
+    indptr = _indptr(counts)
+    nnz = int(indptr[-1])
     rows = np.empty(nnz, dtype=np.int32)
     vals = np.empty(nnz)
     while pieces:
@@ -551,6 +549,24 @@ def _by_columns(n, pieces):
         rows[dest] = r
         vals[dest] = v
     return sp.csr_matrix((vals, rows, indptr), shape=(n, n))
+
+
+def _indptr(counts):
+    """Compressed-row pointers of rows holding ``counts`` entries (int32 while they fit)."""
+    total = int(np.sum(counts))
+    indptr = np.zeros(len(counts) + 1, dtype=np.int32 if total < 2 ** 31 else np.int64)
+    np.cumsum(counts, out=indptr[1:])
+    return indptr
+
+
+def _row_blocks(M):
+    """(start, stop, row of each entry) of consecutive row blocks of the csr matrix M holding
+    about :data:`ASSEMBLY_CHUNK` entries each (entries ``start:stop`` of its arrays)."""
+    n = M.shape[0]
+    step = max(1, int(n * ASSEMBLY_CHUNK // max(M.nnz, 1)))
+    for a in range(0, n, step):
+        b = min(a + step, n)
+        yield int(M.indptr[a]), int(M.indptr[b]), np.repeat(np.arange(a, b), np.diff(M.indptr[a:b + 1]))
 
 
 def _symmetric(n, pieces):
@@ -568,11 +584,8 @@ def _symmetric(n, pieces):
         parts.append((np.diff(part.indptr), part.indices.astype(np.int32), part.data.copy()))
         del mine, part
     del A
-    counts = np.concatenate([p[0] for p in parts])
-    nnz = int(counts.sum())
-    itype = np.int32 if nnz < 2 ** 31 else np.int64
-    indptr = np.zeros(n + 1, dtype=itype)
-    np.cumsum(counts, out=indptr[1:])
+    indptr = _indptr(np.concatenate([p[0] for p in parts]))
+    nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=np.int32)
     data = np.empty(nnz)
     at = 0
@@ -591,13 +604,8 @@ def _entry_bounds(K, mass, rel, add, lost):
     Entry (i, j) of K is the computed value of column j or of column i; column c's value at
     row r is within ``rel[c] * value + add[c] + lost[c] / B_rr`` of the truth, increasing in
     the value, so either column's expression at K_ij (at least the value it stored) bounds it."""
-    n = K.shape[0]
     out = np.empty(K.nnz, dtype=np.float32)
-    step = max(1, int(n * ASSEMBLY_CHUNK // max(K.nnz, 1)))
-    for a in range(0, n, step):
-        b = min(a + step, n)
-        lo, hi = int(K.indptr[a]), int(K.indptr[b])
-        i = np.repeat(np.arange(a, b), np.diff(K.indptr[a:b + 1]))
+    for lo, hi, i in _row_blocks(K):
         j = K.indices[lo:hi]
         k = K.data[lo:hi]
         mine = rel[i] * k + add[i] + lost[i] / mass[j]
@@ -669,12 +677,7 @@ def sparse_diffusion_distance(lap: Laplacian, t: float, threshold: float = 1e-8,
                                  time_unit=time_unit)
     E = info.pop("abs_error")
     hks, hks_error = K.diagonal(), E.diagonal().astype(float)
-    n = K.shape[0]
-    step = max(1, int(n * ASSEMBLY_CHUNK // max(K.nnz, 1)))
-    for a in range(0, n, step):                  # in place: D and its bound take K's arrays
-        b = min(a + step, n)
-        lo, hi = int(K.indptr[a]), int(K.indptr[b])
-        i = np.repeat(np.arange(a, b), np.diff(K.indptr[a:b + 1]))
+    for lo, hi, i in _row_blocks(K):             # in place: D and its bound take K's arrays
         j = K.indices[lo:hi]
         k = K.data[lo:hi]
         d2 = hks[i] + hks[j] - 2.0 * k

@@ -315,11 +315,15 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float, mass=None
         products = terms(t, alpha, tail)
     # 1 / B_ss is rounded by u relative, which moves the exact kernel by as much
     e = e + 2.0 * U * (u + e)
-    # heat kept in R, from below: sum_j B_jj (u_j - e_j)^+, its rounding relative gamma_{|R|+2}
-    kept = (mass @ np.maximum(u - e, 0.0)) * (1.0 - _gamma(R.size + 2))
+    return u, e, _lost(lap, t, mass @ np.maximum(u - e, 0.0), R.size), products
+
+
+def _lost(lap, t, kept, size):
+    """Proved bound of the heat outside a region of ``size`` vertices, from the computed heat
+    ``kept`` in it, sum_j B_jj (u_j - e_j)^+ (its rounding relative gamma_{size+2})."""
+    kept = kept * (1.0 - _gamma(np.asarray(size) + 2))
     top = math.exp(heat_drift(lap) * t) * (1.0 + 8.0 * U)
-    lost = np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
-    return u, e, lost, products
+    return np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
 
 
 def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets, tail: float, mass=None):
@@ -390,12 +394,8 @@ def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets,
     err = np.repeat(rel, np.diff(region_offsets))[:, None] * u + add
     low = np.maximum(u - err, 0.0)
     low *= m[:, None]
-    sizes = np.diff(region_offsets)
-    shrink = np.array([1.0 - _gamma(int(r) + 2) for r in sizes])
-    kept = np.add.reduceat(low, region_offsets[:-1], axis=0) * shrink[:, None]
-    top = math.exp(heat_drift(lap) * t) * (1.0 + 8.0 * U)
-    lost = np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
-    return u, rel, add, lost, work / L.nnz
+    kept = np.add.reduceat(low, region_offsets[:-1], axis=0)
+    return u, rel, add, _lost(lap, t, kept, np.diff(region_offsets)[:, None]), work / L.nnz
 
 
 def _ball_measure(radius: float, d: int) -> float:
