@@ -8,11 +8,14 @@ products spent; then checks against global reference columns (``heat_kernel``,
 ``"rational"``, tol 1e-12, with its own bound) at a few sources: stored entries outside
 their bound, dropped entries above ``dropped_max``, dropped mass above ``dropped_mass`` (all
 must be 0), and the largest bounds relative to the column's peak; and the heat kernel
-signature of every vertex (K's diagonal) against the reference's diagonal entries.
+signature of every vertex (K's diagonal) against the reference's diagonal entries. With
+``--distances``, also :func:`spectral_igl.sparse_diffusion_distance` (every stored pair),
+timed the same way and checked at the same sources against ``diffusion_distance``
+(``"rational"``, tol 1e-12; the reference's bound on d^2 carried to d).
 
 Usage::
 
-    python benchmarks/sparse_heat.py --mesh ../shared/data/meshes/stanford-bunny.obj --subdivide 1
+    python benchmarks/sparse_heat.py --mesh ../shared/data/meshes/stanford-bunny.obj --subdivide 1 --distances
 """
 from __future__ import annotations
 
@@ -55,15 +58,30 @@ def check(lap, t, K, info, sources):
     return bad
 
 
+def check_distances(lap, t, D, info, sources):
+    """Stored distances outside their bound at the sources (against the reference's interval)."""
+    bad = 0
+    for s in sources:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sig.accuracy.AccuracyWarning)
+            ref, rinfo = sig.diffusion_distance(lap, t, s, method="rational", tol=1e-12, return_info=True)
+        row = D[s]
+        got, err = row.data, info["abs_error"][s].data
+        exact, slack = ref[row.indices], rinfo["abs_error"][row.indices]
+        bad += int(np.count_nonzero(np.abs(got - exact) > err + slack))
+    return bad
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh", required=True)
     ap.add_argument("--subdivide", type=int, default=0)
     ap.add_argument("--times", type=float, nargs="+", default=[1e-5])
     ap.add_argument("--threshold", type=float, default=1e-8)
-    ap.add_argument("--block", type=int, default=64)
+    ap.add_argument("--block", type=int, default=32)
     ap.add_argument("--sources", type=int, default=3)
     ap.add_argument("--no-check", action="store_true", help="skip the reference columns (large n)")
+    ap.add_argument("--distances", action="store_true", help="also time and check sparse_diffusion_distance")
     args = ap.parse_args(argv)
     name, lap = load(args.mesh, args.subdivide)
     sources = np.random.default_rng(0).choice(lap.n, args.sources, replace=False)
@@ -92,6 +110,23 @@ def main(argv=None):
         print(f"| {t:g} | {sec / chol:.2f} | {cpu / chol_cpu:.2f} | {chol:.2f} | {K.nnz / lap.n:.0f} | {peak / 2 ** 30:.2f} | "
               f"{rss:.2f} | {info['products']:.0f} | {rel.max():.1e} | "
               f"{np.max(info['dropped_max'] / d):.1e} | {info['dropped_mass'].max():.1e} | {bad} |", flush=True)
+        del K, info
+        if args.distances:
+            lap.cache.clear()
+            tracemalloc.start()
+            t0, c0 = time.perf_counter(), time.process_time()
+            D, dinfo = sig.sparse_diffusion_distance(lap, t, threshold=args.threshold, block=args.block,
+                                                     return_info=True)
+            sec, cpu = time.perf_counter() - t0, time.process_time() - c0
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+            bad = "not checked" if args.no_check else check_distances(lap, t, D, dinfo, sources)
+            off = D.data > 0
+            print(f"# diffusion distances at t = {t:g}: {sec / chol:.2f} Cholesky ({cpu / chol_cpu:.2f} in CPU "
+                  f"time), {D.nnz / lap.n:.0f} pairs per vertex, traced peak {peak / 2 ** 30:.2f} GB, median "
+                  f"bound / distance {np.median(dinfo['abs_error'].data[off] / D.data[off]):.1e}, HKS bound / "
+                  f"HKS max {np.max(dinfo['hks_error'] / dinfo['hks']):.1e}, outside bounds: {bad}", flush=True)
+            del D, dinfo
 
 
 if __name__ == "__main__":

@@ -77,7 +77,7 @@ from .distances import (
 )
 from .embedding import spectral_embedding
 from .kernels import heat_kernel, heat_kernels, spectral_kernel
-from .local import local_heat_kernel, local_mexican_hat, sparse_heat_kernel
+from .local import local_heat_kernel, local_mexican_hat, sparse_diffusion_distance, sparse_heat_kernel
 from .laplacian import (
                            Laplacian,
                            anisotropic_laplacian,
@@ -105,7 +105,7 @@ __all__ = [
     # engine
     "accuracy", "filters", "linalg", "METHODS", "apply_filter", "SpectralOperator", "spectral_operator",
     # kernels, distances, descriptors
-    "spectral_kernel", "heat_kernel", "heat_kernels", "local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel", "kernel_diagonal",
+    "spectral_kernel", "heat_kernel", "heat_kernels", "local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel", "sparse_diffusion_distance", "kernel_diagonal",
     "distance_colouring",
     "spectral_distance", "OneToAll", "pairwise_spectral_distance", "pairwise_diffusion_distance",
     "pairwise_commute_time_distance", "pairwise_biharmonic_distance", "pairwise_polyharmonic_distance",

@@ -222,3 +222,64 @@ def test_sparse_heat_kernel_refuses_dense_and_bad_arguments():
     V, F = icosphere(2)
     with pytest.raises(ValueError, match="positive=True"):
         sig.sparse_heat_kernel(sig.laplacian(V, F, mass="full"), 1e-3)
+
+
+@pytest.mark.parametrize("name, t", [("grid", 1e-4), ("two", 2e-4), ("icosphere", 5e-5)])
+def test_sparse_diffusion_distance_every_stored_pair(name, t):
+    lap, w, X = _exact(name)
+    exact_K = (X * np.exp(-t * w)) @ X.T
+    diag = np.diag(exact_K)
+    exact = np.sqrt(np.maximum(diag[:, None] + diag[None, :] - 2.0 * exact_K, 0.0))
+    D, info = sig.sparse_diffusion_distance(lap, t, return_info=True)
+    assert info["bound_kind"] == "proof" and abs(D - D.T).max() == 0
+    K = sig.sparse_heat_kernel(lap, t)
+    assert np.array_equal(D.indices, K.indices) and np.array_equal(D.indptr, K.indptr)
+    rows = np.repeat(np.arange(lap.n), np.diff(D.indptr))
+    got, err = D.data, info["abs_error"].data.astype(float)
+    # the reference's rounding of d^2 (1e-12 of the peak) is up to its square root in d
+    slack = np.sqrt(REFERENCE * diag.max())
+    assert np.all(np.abs(got - exact[rows, D.indices]) <= err + slack)
+    assert np.all(np.abs(info["hks"] - diag) <= info["hks_error"] + REFERENCE * diag)
+    # not vacuous: off the diagonal the bound is a small share of the distance
+    off = rows != D.indices
+    assert np.median(err[off] / got[off]) < 1e-3
+    # an unstored pair is as far as the kernel's dropped entries say
+    stored = K.toarray() > 0
+    low = diag[:, None] + diag[None, :] - 2.0 * np.minimum.outer(info["dropped_max"], info["dropped_max"])
+    assert np.all((exact ** 2 >= low - info["hks_error"][:, None] - info["hks_error"][None, :]
+                   - REFERENCE * diag.max())[~stored])
+
+
+def test_stacked_regions_each_within_their_own_bound():
+    """Three Dirichlet regions of different rates in one block-diagonal series: each block's
+    columns within the proved bound of its own exact exponential (dense expm)."""
+    import scipy.sparse as sp
+    from spectral_igl.approx.region import dirichlet_heat_blocks, grow_regions, vertex_spacing
+
+    lap, _, _ = _exact("grid")
+    t = 2e-4
+    h2 = vertex_spacing(lap)
+    sources = np.array([0, 1, 300, 301, 302, 620])
+    offsets = np.array([0, 2, 5, 6])
+    keys, roff = grow_regions(sp.csr_matrix(lap.L), h2, sources, offsets, np.array([0.05, 0.12, 0.08]),
+                              np.full(3, lap.n), lap.components)
+    u, rel, add, lost, _ = dirichlet_heat_blocks(lap, t, keys, roff, sources, offsets, 1e-14)
+    L, m = lap.L.toarray(), lap.mass
+    for b in range(3):
+        R = keys[roff[b]:roff[b + 1]] % lap.n
+        assert np.all(np.isin(sources[offsets[b]:offsets[b + 1]], R))
+        A = L[np.ix_(R, R)] / m[R][:, None]
+        cols = sources[offsets[b]:offsets[b + 1]]
+        G = np.zeros((R.size, cols.size))
+        G[np.searchsorted(R, cols), np.arange(cols.size)] = 1.0 / m[cols]
+        exact = sl.expm(-t * A) @ G
+        got = u[roff[b]:roff[b + 1], :cols.size]
+        bound = rel[b] * got + add[roff[b]:roff[b + 1], :cols.size]
+        assert np.all(np.abs(got - exact) <= bound + REFERENCE * exact.max())
+        # the Dirichlet kernel is below the true one, and the heat lost bounds what is missing
+        full = sl.expm(-t * L / m[:, None]) @ (np.eye(lap.n)[:, cols] / m[cols])
+        assert np.all(exact <= full[R] + REFERENCE * full.max())
+        missing = m @ full - m[R] @ exact
+        assert np.all(missing <= lost[b, :cols.size] + REFERENCE)
+    # a group's columns past its size are 0
+    assert np.all(u[roff[2]:roff[3], 1:] == 0)

@@ -38,10 +38,10 @@ import scipy.sparse as sp
 
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
-from .uniformization import rate_matrix, terms, uniformize
+from .uniformization import rate_matrix, terms, uniformize, uniformize_blocks
 
-__all__ = ["region_heat_column", "dirichlet_heat", "grow_region", "patches", "vertex_spacing", "heat_drift",
-           "first_radius", "MAX_FRACTION", "BUDGET", "GROWTH"]
+__all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches", "vertex_spacing", "heat_drift",
+           "first_radius", "first_radii", "MAX_FRACTION", "BUDGET", "GROWTH"]
 
 #: largest share of the source's component a region grows to before it takes the whole
 #: component, and of all vertices before the column is declined (the global path's turn)
@@ -83,12 +83,19 @@ def vertex_spacing(lap) -> np.ndarray:
     return lap.cache.fetch("bound", "vertex_spacing", build)
 
 
-def _neighbours(L: sp.csr_matrix, rows: np.ndarray):
-    """(row of each edge, column of each edge) of the given rows of L."""
+def _edges(L: sp.csr_matrix, rows: np.ndarray):
+    """(index into ``rows`` of each edge, column of each edge, its position in L.data) of the
+    given rows of L, row by row in L's order."""
     starts, stops = L.indptr[rows], L.indptr[rows + 1]
     counts = stops - starts
     pos = np.repeat(stops - np.cumsum(counts), counts) + np.arange(int(counts.sum()))
-    return np.repeat(rows, counts), L.indices[pos]
+    return np.repeat(np.arange(rows.size), counts), L.indices[pos], pos
+
+
+def _neighbours(L: sp.csr_matrix, rows: np.ndarray):
+    """(row of each edge, column of each edge) of the given rows of L."""
+    owner, cols, _ = _edges(L, rows)
+    return rows[owner], cols
 
 
 def grow_region(L, h2, sources, radius: float, limit: int | None = None):
@@ -138,6 +145,67 @@ def grow_region(L, h2, sources, radius: float, limit: int | None = None):
         if limit is not None and count > limit:
             return None, nearest_out
     return np.sort(np.concatenate(rings)), nearest_out
+
+
+def grow_regions(L, h2, sources, offsets, radii, limits, labels):
+    """:func:`grow_region` for many groups of sources at once, each with its own radius.
+
+    Parameters
+    ----------
+    L : (n, n) scipy.sparse.csr_matrix
+    h2 : (n,) float
+        Squared spacing of each vertex (:func:`vertex_spacing`).
+    sources : (m,) int
+        The sources of every group, group after group.
+    offsets : (g + 1,) int
+        Group b holds ``sources[offsets[b]:offsets[b+1]]`` (at least one).
+    radii : (g,) float
+    limits : (g,) int
+        A group whose region passes this many vertices takes its whole component instead.
+    labels : (n,) int
+        Connected component of each vertex (a group lies in one).
+
+    Returns
+    -------
+    keys : (k,) int64
+        Sorted ``group * n + vertex`` of every region's vertices: group after group, each
+        region's vertices ascending.
+    region_offsets : (g + 1,) int
+        Group b's region is ``keys[region_offsets[b]:region_offsets[b+1]] % n``.
+    """
+    n = L.shape[0]
+    count = len(offsets) - 1
+    group = np.repeat(np.arange(count, dtype=np.int64), np.diff(offsets))
+    seen = np.unique(group * n + np.asarray(sources, dtype=np.int64))
+    front, dist = seen, np.zeros(seen.size)
+    size = np.bincount(seen // n, minlength=count)
+    over = size > limits
+    while front.size:
+        g, v = np.divmod(front, n)
+        e, j, _ = _edges(L, v)
+        d = dist[e] + np.sqrt(0.5 * (h2[v[e]] + h2[j]))
+        k = g[e] * n + j
+        at = np.minimum(np.searchsorted(seen, k), seen.size - 1)
+        new = seen[at] != k
+        k, d = k[new], d[new]
+        order = np.lexsort((d, k))
+        k, d = k[order], d[order]
+        first = np.r_[True, k[1:] != k[:-1]] if k.size else np.zeros(0, bool)
+        k, d = k[first], d[first]
+        inside = d <= radii[k // n]
+        front, dist = k[inside], d[inside]
+        size += np.bincount(front // n, minlength=count)
+        over |= size > limits
+        keep = ~over[front // n]
+        front, dist = front[keep], dist[keep]
+        seen = np.sort(np.concatenate([seen, front]))
+    if over.any():
+        seen = seen[~over[seen // n]]
+        whole = [b * n + np.flatnonzero(labels == labels[sources[offsets[b]]]) for b in np.flatnonzero(over)]
+        seen = np.sort(np.concatenate([seen] + whole))
+    region_offsets = np.zeros(count + 1, dtype=np.int64)
+    np.cumsum(np.bincount(seen // n, minlength=count), out=region_offsets[1:])
+    return seen, region_offsets
 
 
 def patches(L, size: int):
@@ -247,11 +315,87 @@ def dirichlet_heat(lap, t: float, R: np.ndarray, sources, tail: float, mass=None
         products = terms(t, alpha, tail)
     # 1 / B_ss is rounded by u relative, which moves the exact kernel by as much
     e = e + 2.0 * U * (u + e)
-    # heat kept in R, from below: sum_j B_jj (u_j - e_j)^+, its rounding relative gamma_{|R|+2}
-    kept = (mass @ np.maximum(u - e, 0.0)) * (1.0 - _gamma(R.size + 2))
+    return u, e, _lost(lap, t, mass @ np.maximum(u - e, 0.0), R.size), products
+
+
+def _lost(lap, t, kept, size):
+    """Proved bound of the heat outside a region of ``size`` vertices, from the computed heat
+    ``kept`` in it, sum_j B_jj (u_j - e_j)^+ (its rounding relative gamma_{size+2})."""
+    kept = kept * (1.0 - _gamma(np.asarray(size) + 2))
     top = math.exp(heat_drift(lap) * t) * (1.0 + 8.0 * U)
-    lost = np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
-    return u, e, lost, products
+    return np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
+
+
+def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets, tail: float, mass=None):
+    r""":func:`dirichlet_heat` for many groups of sources, each on its own region, in one series.
+
+    The regions' Dirichlet operators are stacked into one block-diagonal operator, each block
+    with its own rate (:func:`~.uniformization.uniformize_blocks`), so one sparse product per
+    term serves every group: the proofs are those of :func:`dirichlet_heat`, block by block.
+
+    Parameters
+    ----------
+    lap : Laplacian
+        Metzler.
+    t : float
+        Absolute time.
+    keys, region_offsets : from :func:`grow_regions`
+        Group b's region, holding its sources.
+    sources : (m,) int
+    offsets : (g + 1,) int
+        Group b's sources are ``sources[offsets[b]:offsets[b+1]]``.
+    tail : float
+        Allowed truncation of the series, relative to each column's peak :math:`1/B_{ss}`.
+    mass : (n,) float, optional
+
+    Returns
+    -------
+    u : (k, w) float
+        Row r of block b (the vertex ``keys[r] % n``), column c: :math:`K^R_t` of the group's
+        c-th source (w the largest group; columns past a group's size are 0).
+    rel, add : (g,) float and (k, w) float
+        The proved bound of u's error against the exact :math:`K^R_t` is
+        ``e = rel[b] * u + add`` on block b (:func:`dirichlet_heat`'s e, the rounding of
+        :math:`1/B_{ss}` included).
+    lost : (g, w) float
+        Proved bound m of each column's heat outside its region.
+    products : float
+        Sparse products of the whole operator spent (entries of the regions' operators
+        multiplied, over L's). Fastest with the groups in decreasing order of their regions'
+        largest :math:`L_{jj}/B_{jj}`: each block then stops at its own number of terms.
+    """
+    n = lap.n
+    mass = lap.mass if mass is None else mass
+    L = sp.csr_matrix(lap.L)
+    group, verts = np.divmod(keys, n)
+    # the regions' principal submatrices of L, stacked: edge (r, j) kept when j is in r's region
+    e, j, pos = _edges(L, verts)
+    target = group[e] * n + j
+    at = np.minimum(np.searchsorted(keys, target), keys.size - 1)
+    inside = keys[at] == target
+    indptr = np.zeros(keys.size + 1, dtype=np.int64)
+    np.cumsum(np.bincount(e[inside], minlength=keys.size), out=indptr[1:])
+    stacked = sp.csr_matrix((L.data[pos[inside]], at[inside], indptr), shape=(keys.size, keys.size))
+    del e, j, pos, target, at, inside
+    m = mass[verts]
+    alpha, P = rate_matrix(stacked, m, region_offsets)
+    counts = np.diff(offsets)
+    width = int(counts.max())
+    col = np.arange(sources.size) - np.repeat(offsets[:-1], counts)
+    row = np.searchsorted(keys, np.repeat(np.arange(counts.size, dtype=np.int64), counts) * n + sources)
+    G = np.zeros((keys.size, width))
+    G[row, col] = 1.0 / mass[sources]
+    u, rel, add, work = uniformize_blocks(P, alpha, region_offsets, t, G, tail)
+    del G
+    # 1 / B_ss is rounded by u relative, which moves the exact kernel by as much (dirichlet_heat)
+    # (and the products and sums forming e below, within 4u of e)
+    rel = ((1.0 + 2.0 * U) * rel + 2.0 * U) * (1.0 + 4.0 * U)
+    add = (1.0 + 2.0 * U) * add * (1.0 + 4.0 * U)
+    err = np.repeat(rel, np.diff(region_offsets))[:, None] * u + add
+    low = np.maximum(u - err, 0.0)
+    low *= m[:, None]
+    kept = np.add.reduceat(low, region_offsets[:-1], axis=0)
+    return u, rel, add, _lost(lap, t, kept, np.diff(region_offsets)[:, None]), work / L.nnz
 
 
 def _ball_measure(radius: float, d: int) -> float:
@@ -266,8 +410,23 @@ def first_radius(t: float, h2_source: float, goal: float) -> float:
     allows."""
     rate_time = 4.25 * t / h2_source
     hops = min(terms(t, 4.25 / h2_source, min(goal, 0.5)), 6) if rate_time < 0.2 else 0
-    return max(math.sqrt(4.0 * t * math.log(1.0 / goal)) if goal < 1 else 0.0,
-               hops * math.sqrt(h2_source) if hops else 0.0)
+    return max(float(_gaussian_radius(t, goal)), hops * math.sqrt(h2_source) if hops else 0.0)
+
+
+def _gaussian_radius(t, goal):
+    """sqrt(4 t log(1/goal)) (0 where goal >= 1): the radius beyond which a Gaussian's heat is goal."""
+    goal = np.asarray(goal, dtype=float)
+    return np.sqrt(4.0 * t * np.log(1.0 / np.minimum(goal, 1.0)))
+
+
+def first_radii(t: float, h2, goal) -> np.ndarray:
+    """:func:`first_radius` of many sources (their squared spacings and allowed heats), at once."""
+    h2 = np.asarray(h2, dtype=float)
+    goal = np.asarray(goal, dtype=float)
+    radii = _gaussian_radius(t, goal)
+    for i in np.flatnonzero(4.25 * t / h2 < 0.2):      # the hop regime: few sources, one by one
+        radii[i] = first_radius(t, float(h2[i]), float(goal[i]))
+    return radii
 
 
 def region_heat_column(lap, t: float, source: int, tol: float, budget: float = BUDGET):

@@ -39,10 +39,11 @@ import sys
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.special import gammaln
 
 from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 
-__all__ = ["metzler_heat", "uniformize", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL"]
+__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
 STEP = 512.0
@@ -62,37 +63,61 @@ def rate(lap):
     return lap.cache.fetch("bound", "uniformization", build)
 
 
-def rate_matrix(L, mass):
+def rate_matrix(L, mass, offsets=None):
     """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
     and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
-    every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R."""
+    every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R.
+
+    With ``offsets`` (increasing, from 0 to n, blocks of at least one row) L is block diagonal
+    and each block b (rows ``offsets[b]:offsets[b+1]``) gets its own rate: alpha is then an
+    array (0 for a block whose diagonal is 0, whose rows of P are the identity's) for
+    :func:`uniformize_blocks`."""
     L = sp.csr_matrix(L, dtype=float)
     d = L.diagonal() / mass
-    top = float(np.max(d)) if d.size else 0.0
-    if not top > 0:
-        return 0.0, None
-    alpha = 1.0625 * top
-    P = sp.csr_matrix(sp.diags(-1.0 / (mass * alpha)) @ L)
-    P.setdiag(1.0 - d / alpha)
+    if offsets is not None:
+        offsets = np.asarray(offsets, dtype=np.int64)
+        alpha = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
+        scale = np.repeat(np.where(alpha > 0, alpha, 1.0), np.diff(offsets))
+    else:
+        top = float(np.max(d)) if d.size else 0.0
+        if not top > 0:
+            return 0.0, None
+        alpha = scale = 1.0625 * top
+    P = sp.csr_matrix(sp.diags(-1.0 / (mass * scale)) @ L)
+    P.setdiag(1.0 - d / scale)
     P.eliminate_zeros()
     return alpha, P
 
 
 def _terms(lam, tail):
-    r"""Smallest K with P[Poisson(lam) > K] <= tail, and that tail's bound.
+    """:func:`_terms_many` of one Poisson mean: (K, its tail's bound)."""
+    K, tau = _terms_many([lam], tail)
+    return int(K[0]), float(tau[0])
+
+
+def _terms_many(lams, tail):
+    r"""Smallest K with P[Poisson(lam) > K] <= tail for every (positive) lam, and those tails'
+    bounds, as arrays.
 
     :math:`\Pr[X > K] \le \pi_{K+1}/(1 - \lambda/(K+2))` for :math:`K + 2 > \lambda` (the
     ratios :math:`\pi_{k+1}/\pi_k = \lambda/(k+1)` decrease), with :math:`\pi_{K+1}` from
-    ``lgamma`` (taken within 1e-12 relative in the exponent's scale).
+    ``gammaln`` (taken within 1e-12 relative in the exponent's scale).
     """
+    lams = np.asarray(lams, dtype=float)
     log_tail = math.log(tail)
-    K = max(int(math.ceil(lam)), 1)
-    while True:
-        lp = -lam + (K + 1) * math.log(lam) - math.lgamma(K + 2)
-        lt = lp - math.log1p(-lam / (K + 2)) + 1e-12 * (lam + K + 2) * (1.0 + abs(math.log(lam)))
-        if lt <= log_tail:
-            return K, math.exp(lt)
-        K += max(1, K // 256)
+    K = np.maximum(np.ceil(lams), 1.0)
+    out_k, out_tau = np.zeros(lams.size, dtype=np.int64), np.zeros(lams.size)
+    todo = np.arange(lams.size)
+    while todo.size:
+        lam, k = lams[todo], K[todo]
+        lp = -lam + (k + 1) * np.log(lam) - gammaln(k + 2)
+        lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(np.log(lam)))
+        ok = lt <= log_tail
+        out_k[todo[ok]] = k[ok]
+        out_tau[todo[ok]] = np.exp(lt[ok])
+        K[todo] = k + np.maximum(1.0, np.floor(k / 256))
+        todo = todo[~ok]
+    return out_k, out_tau
 
 
 def terms(t: float, alpha: float, tail: float = TAIL) -> int:
@@ -171,39 +196,112 @@ def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
     if np.any(G < 0) or not np.all(np.isfinite(G)):
         raise ValueError("G must be finite and non-negative")
     one = G.ndim == 1
-    V = G.reshape(G.shape[0], -1).copy()
-    gmax = np.max(V, axis=0) if V.size else np.zeros(V.shape[1])
+    V = G.reshape(G.shape[0], -1)
     if alpha == 0 or t == 0:
+        V = V.copy()
         err = np.zeros_like(V)
         return (V[:, 0], err[:, 0]) if one else (V, err)
-    if not t * alpha <= MAX_RATE_TIME:
-        raise ValueError(f"t * alpha = {t * alpha:.3g}: uniformization would take more than "
+    V, rel, add, _ = uniformize_blocks(P, [alpha], [0, V.shape[0]], t, V, tail)
+    err = rel[0] * V + add
+    return (V[:, 0], err[:, 0]) if one else (V, err)
+
+
+def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = TAIL):
+    r""":func:`uniformize` on a block-diagonal P whose blocks have their own rates, at once.
+
+    Block b holds rows ``offsets[b]:offsets[b+1]`` of P and G; P has no entry coupling two
+    blocks, and block b was built with the rate ``alpha[b]`` (:func:`rate_matrix` with
+    ``offsets``), so each block's series is its own operator's
+    :math:`e^{-t\alpha_b(I - P_b)}` and its bound the proof of the module notes with that
+    block's Poisson tail. All blocks take the same number of steps and terms (the largest any
+    needs; more terms only shrink a tail). One sparse product per term serves every block: the
+    independent regions of many sources in one call.
+
+    Parameters
+    ----------
+    P : (n, n) scipy.sparse.csr_matrix
+        Non-negative, rows summing to at most 1, diagonal at least 1/17, block diagonal.
+    alpha : (nb,) float
+        The rate of each block (0 for a block whose operator is 0: P's rows are then those of
+        the identity).
+    offsets : (nb + 1,) int
+        Increasing, from 0 to n: every block holds at least one row.
+    t : float
+    G : (n, m) float, non-negative
+    tail : float
+        Allowed truncation, in total over the steps, relative to each block's column maximum.
+
+    Returns
+    -------
+    V : (n, m) float
+    rel : (nb,) float
+    add : (n, m) float
+        :math:`|V - e^{-t\alpha_b(I - P_b)}G_b| \le` ``rel[b] * V + add`` on the rows of block
+        b, entry by entry: a proof (``add`` is each block column's truncation, the same down the
+        block, plus the underflow allowance).
+    work : int
+        Stored entries of P multiplied in all (a block stops at its own number of terms when the
+        blocks come in decreasing order of rate).
+    """
+    G = np.asarray(G, dtype=float)
+    alpha = np.asarray(alpha, dtype=float)
+    offsets = np.asarray(offsets, dtype=np.int64)
+    if not np.all(np.isfinite(alpha * t)) or np.any(alpha * t > MAX_RATE_TIME):
+        raise ValueError(f"t * alpha up to {np.max(alpha) * t:.3g}: uniformization would take more than "
                          f"{MAX_RATE_TIME:.0e} sparse products")
-    s, lam = _steps(t, alpha)
-    K, step_tail = _terms(lam, tail / s)
+    counts = np.diff(offsets)
+    gmax = np.maximum.reduceat(G, offsets[:-1], axis=0)
+    s = max([_steps(t, a)[0] if a > 0 else 1 for a in alpha.tolist()] or [1])
+    lams = [t * a / s for a in alpha.tolist()]       # as _steps rounds it
+    positive = np.array(lams) > 0
+    need, taus = np.zeros(len(lams), dtype=np.int64), np.zeros(len(lams))
+    if positive.any():
+        need[positive], taus[positive] = _terms_many(np.array(lams)[positive], tail / s)
+    K = int(need.max(initial=0))
     r = max(int(np.max(np.diff(P.indptr), initial=0)), 1)
-    # entries of P within 33u: off-diagonal three roundings; diagonal 1 - x with x within 2u
-    # relative, x / (1 - x) <= 16, and the subtraction's own rounding
+    lam = np.array(lams)
+    single = alpha.size == 1
+    # blocks in decreasing order of terms: term k needs only the rows of the blocks still
+    # summing, a leading part of P (block diagonal: its columns are those rows too)
+    leading = bool(np.all(np.diff(need) <= 0))
+    lam_rows = float(lam[0]) if single else np.repeat(lam, counts)[:, None]
+    heads = {}
+
+    def head(k):
+        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else G.shape[0]
+        if rows not in heads:
+            end = int(P.indptr[rows])
+            heads[rows] = (P if rows == G.shape[0] else
+                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
+        return rows, heads[rows]
+
+    V = G.copy()
+    work = 0
+    for _ in range(s):
+        # term k, c_k P^k V with c_k = e^-lam lam^k / k!, as (lam / k) P (term k - 1): the same
+        # roundings as the coefficient and the products formed apart (module notes)
+        q = V * (float(math.exp(-lams[0])) if single else
+                 np.repeat([math.exp(-x) for x in lams], counts)[:, None])
+        W = q.copy()
+        for k in range(1, K + 1):
+            rows, Pk = head(k)
+            q = Pk @ q[:rows]
+            q *= lam_rows / k if single else lam_rows[:rows] / k
+            W[:rows] += q
+            work += Pk.nnz
+        V = W
+    # each step's relative rounding (module notes), with K terms for every block
     eps1 = 33.0 * U + _gamma(r) * (1.0 + 33.0 * U)
-    # one step, relative and componentwise: term k has k products and a coefficient within
-    # gamma_2k + 4u, times (1 + u) for the product, and the sum of K+1 terms adds gamma_{K+1}
     delta = math.expm1(K * math.log1p(eps1) + math.log1p(_gamma(2 * K) + 4 * U) + math.log1p(U)) \
         + _gamma(K + 1)
     delta *= 1.0 + 1e-6
-    for _ in range(s):
-        c = math.exp(-lam)
-        W = c * V
-        p = V
-        for k in range(1, K + 1):
-            p = P @ p
-            c *= lam / k
-            W += c * p
-        V = W
     # the steps apply the exact semigroup at t' = s lam / alpha, |t' - t| <= 4u t; for a Metzler
     # generator K(t') / K(t) lies in [e^{-|t'-t| alpha}, e^{|t'-t| alpha}] entrywise
-    rho = math.expm1(s * math.log1p(delta) + 4.0 * U * t * alpha * (1.0 + 1e-6))
+    rho = np.expm1(s * math.log1p(delta) + 4.0 * U * t * alpha * (1.0 + 1e-6))
+    rel = rho / (1.0 - rho)
     # plus what underflow can lose: each of the s * (K + 1) products and sums of r + 1 terms
     # rounds an entry by at most one subnormal unit per term
-    tiny = s * (K + 1) * (r + 2) * float(np.finfo(float).smallest_subnormal)
-    err = rho * V / (1.0 - rho) + s * step_tail * gmax[None, :] * (1.0 + 1e-6) + tiny
-    return (V[:, 0], err[:, 0]) if one else (V, err)
+    tiny = s * (K + 1) * (r + 3) * float(np.finfo(float).smallest_subnormal)
+    trunc = s * taus[:, None] * gmax * (1.0 + 1e-6) + tiny
+    add = np.repeat(trunc, counts, axis=0)
+    return V, rel, add, work
