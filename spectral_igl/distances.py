@@ -18,7 +18,7 @@ import numpy as np
 from .accuracy import info as bound_info, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_int, check_dense_size
 from .approx import spectral_operator
-from .approx.region import BUDGET, region_heat_column
+from .approx.region import region_heat_column
 from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
                        phi_values, selinv_kernel, selinv_supported)
 from .diagonal.core import column_entry_error
@@ -275,8 +275,8 @@ def _local_norm_distances(lap, filt, s, targets, delta, method, tol, return_info
     (``method="auto"`` on a Metzler operator above
     :data:`~spectral_igl.kernels.LOCAL_MIN_VERTICES` vertices), or None when that is not
     the cheaper path: the filter is not the heat filter, or a column's region would cost too
-    much (all the columns share one budget of :data:`~spectral_igl.approx.region.BUDGET`
-    products of the whole operator).
+    much (each column has the budget of ``heat_kernel``'s local columns,
+    :data:`~spectral_igl.approx.region.BUDGET` products of the whole operator).
 
     With :math:`u_j = K_{t/2}(:, j)` each column is computed on a region around its source
     within :math:`\|\tilde u_j - u_j\|_B \le \beta_j \le (\mathrm{tol}/\sqrt 2)\,
@@ -291,12 +291,12 @@ def _local_norm_distances(lap, filt, s, targets, delta, method, tol, return_info
         return None
     half = float(filt.params["t"])
     idx = as_indices(targets, lap.n, "targets")
-    budget, columns = BUDGET, {}
+    cost, columns = 0.0, {}
     for j in np.unique(np.r_[s, idx]):
-        col, cinfo = region_heat_column(lap, half, int(j), tol / np.sqrt(2.0), budget=budget)
+        col, cinfo = region_heat_column(lap, half, int(j), tol / np.sqrt(2.0))
         if col is None:
             return None
-        budget -= cinfo["cost"]
+        cost += cinfo["cost"]
         support = np.flatnonzero(col)
         columns[int(j)] = (support, col[support], float(cinfo["bnorm_error"]))
     mass = lap.mass
@@ -317,8 +317,7 @@ def _local_norm_distances(lap, filt, s, targets, delta, method, tol, return_info
     bound = (bound + _norm_rounding(lap) * d) * (1.0 + 1e-12)
     target = tol * np.sqrt(1.0 / mass[s] + 1.0 / mass[idx])
     warn_missed("diffusion distance", np.where(idx == s, 0.0, bound), target, stacklevel=4)
-    info = bound_info(bound, "proof", "local", tol=tol, engine_method="local",
-                      cost=BUDGET - budget)
+    info = bound_info(bound, "proof", "local", tol=tol, engine_method="local", cost=cost)
     return _finish(d, info, np.arange(idx.size) if np.ndim(targets) else 0, idx.size, return_info)
 
 
