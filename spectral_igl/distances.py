@@ -567,6 +567,13 @@ def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute"
     with :math:`B^{-1}e_i` for the delta so that it converges under refinement): the filter
     passed to :func:`spectral_distance` is ``heat(t / 2)``.
 
+    With a few ``targets`` and ``method="auto"`` on a Metzler operator above
+    :data:`~spectral_igl.kernels.LOCAL_MIN_VERTICES` vertices, each distance is the B-norm of a
+    difference of two heat columns at time t/2 solved on regions around their sources
+    (:func:`~spectral_igl.local_heat_kernel`), with the sum of their proved B-norm bounds;
+    ``info["method"]`` is then ``"local"``. The one-to-all row needs the heat kernel
+    signature of every vertex and stays on the global diagonal.
+
     The survey's §6.2.1 (diffusion distances) and §6.3 (their discretization).
 
     Examples
