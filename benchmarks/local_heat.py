@@ -12,10 +12,18 @@ added), the largest proved bound, the B-norm bound against the tolerance's targe
 number of entries of the local and the auto columns outside their bound (must be 0).
 Medians over the sources.
 
+With ``--targets``: diffusion distances from the first source to that many random targets,
+``sig.diffusion_distance(lap, t, s, targets)`` by default (local half-time columns when they fit
+their budget) and with ``method="rational"`` (the global path), cold, as ratios to one
+Cholesky, and the number of distances where the two differ by more than the sum of their
+proved bounds (must be 0).
+
 Usage::
 
     python benchmarks/local_heat.py --mesh ../shared/data/meshes/armadillo.obj
     python benchmarks/local_heat.py --mesh ../shared/data/meshes/armadillo.obj --subdivide 1
+    python benchmarks/local_heat.py --mesh ../shared/data/meshes/stanford-bunny.obj --subdivide 1 \
+        --times 1e-5 1e-4 --targets 1 8 32
 """
 from __future__ import annotations
 
@@ -104,12 +112,33 @@ def row(lap, t, sources, chol):
     return med, "/".join(sorted(method)), "/".join(sorted(auto))
 
 
+def distance_rows(lap, times, source, counts):
+    """Print the diffusion-distance table: local (auto) against the global path."""
+    print("| t | targets | auto's path | auto | global | Cholesky (s) | max difference / max distance | "
+          "outside both bounds |")
+    print("|---|---|---|---|---|---|---|---|")
+    rng = np.random.default_rng(1)
+    for t in times:
+        chol = cholesky_seconds(lap, t)
+        for m in counts:
+            targets = rng.choice(lap.n, m, replace=False)
+            sec, (d, info) = cold(lap, lambda: sig.diffusion_distance(lap, t, source, targets, return_info=True))
+            gsec, (g, ginfo) = cold(lap, lambda: sig.diffusion_distance(lap, t, source, targets, method="rational",
+                                                                       return_info=True))
+            diff = np.abs(d - g)
+            bad = int(np.count_nonzero(diff > info["abs_error"] + ginfo["abs_error"]))
+            print(f"| {t:g} | {m} | {info['method']} | {sec / chol:.3f} | {gsec / chol:.2f} | {chol:.3f} | "
+                  f"{diff.max() / g.max():.1e} | {bad} |", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh", required=True, help="a triangle mesh (armadillo.obj)")
     ap.add_argument("--subdivide", type=int, default=0)
     ap.add_argument("--times", type=float, nargs="+", default=[1e-6, 1e-5, 1e-4, 3e-4, 1e-3])
     ap.add_argument("--sources", type=int, default=3)
+    ap.add_argument("--targets", type=int, nargs="*", default=[],
+                    help="diffusion distances to this many targets instead of the heat columns")
     args = ap.parse_args(argv)
     name, lap = load(args.mesh, args.subdivide)
     sources = np.random.default_rng(0).choice(lap.n, args.sources, replace=False)
@@ -117,6 +146,9 @@ def main(argv=None):
           f"python {' '.join(sys.argv)}")
     print(f"# {name}: n = {lap.n}, unit area, sources {sources.tolist()}, tol = 1e-8; times / one Cholesky "
           "of B + tL; errors relative to the column's peak; B-norm bound / (tol ||B^-1 e_s||_B)")
+    if args.targets:
+        distance_rows(lap, args.times, int(sources[0]), args.targets)
+        return
     print("| t | method | region | share of n | local | auto | auto's path | global | expm_multiply | "
           "Cholesky (s) | max error | max bound | B-norm bound / target | outside bound | expm_multiply error |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")

@@ -15,9 +15,10 @@ import warnings
 
 import numpy as np
 
-from .accuracy import info as bound_info, weakest
+from .accuracy import info as bound_info, warn_missed, weakest
 from ._validate import as_delta, as_flag, as_index, as_indices, as_int, check_dense_size
 from .approx import spectral_operator
+from .approx.region import region_heat_column
 from .diagonal import (EXACT_MAX, check_diagonal_options, heat_projection_applies, kernel_diagonal, low_rank,
                        phi_values, selinv_kernel, selinv_supported)
 from .diagonal.core import column_entry_error
@@ -31,7 +32,7 @@ from .filters import (
     polyharmonic,
     wave,
 )
-from .kernels import block_sources, heat_kernels, kernel_columns
+from .kernels import LOCAL_MIN_VERTICES, block_sources, heat_kernels, kernel_columns
 from .laplacian import as_laplacian, lambda_max_kind, mass_ratio, shape_time
 from .progress import progress_bar
 
@@ -209,6 +210,9 @@ def spectral_distance(lap, filt, source, targets=None, delta: str = "mass", meth
                           note="truncated eigen-expansion: no error bound")
         return _finish(d, info, targets, n, return_info)
     if targets is not None and _targets_as_norms(lap, targets):
+        local = _local_norm_distances(lap, filt, s, targets, delta, method, tol, return_info)
+        if local is not None:
+            return local
         return _norm_distances(lap, filt, s, targets, delta, method, tol, return_info)
 
     # one-to-all: column of G, diagonal of G
@@ -264,6 +268,57 @@ def _norm_distances(lap, filt, s, targets, delta, method, tol, return_info):
                       tol=tol, engine_method=op.method)
     return _finish(np.sqrt(d2), info, np.arange(t.size) if np.ndim(targets) else 0, t.size,
                    return_info)
+
+
+def _local_norm_distances(lap, filt, s, targets, delta, method, tol, return_info):
+    r"""Diffusion distances to a few targets as B-norms of differences of local heat columns
+    (``method="auto"`` on a Metzler operator above
+    :data:`~spectral_igl.kernels.LOCAL_MIN_VERTICES` vertices), or None when that is not
+    the cheaper path: the filter is not the heat filter, or a column's region would cost too
+    much (each column has the budget of ``heat_kernel``'s local columns,
+    :data:`~spectral_igl.approx.region.BUDGET` products of the whole operator).
+
+    With :math:`u_j = K_{t/2}(:, j)` each column is computed on a region around its source
+    within :math:`\|\tilde u_j - u_j\|_B \le \beta_j \le (\mathrm{tol}/\sqrt 2)\,
+    \|B^{-1}e_j\|_B` (a proof, :func:`~spectral_igl.approx.region.region_heat_column`), and
+    :math:`d(s, i) = \|u_s - u_i\|_B`, so by the reverse triangle inequality
+    :math:`|\tilde d - d| \le \beta_s + \beta_i` plus the rounding of the norm
+    (:func:`_norm_rounding`); that is within :math:`\mathrm{tol}\,\|B^{-1}(e_s - e_i)\|_B`,
+    the global path's promise.
+    """
+    if not (filt.kind == "heat" and method == "auto" and delta == "mass" and lap.is_metzler
+            and lap.n > LOCAL_MIN_VERTICES):
+        return None
+    half = float(filt.params["t"])
+    idx = as_indices(targets, lap.n, "targets")
+    cost, columns = 0.0, {}
+    for j in np.unique(np.r_[s, idx]):
+        col, cinfo = region_heat_column(lap, half, int(j), tol / np.sqrt(2.0))
+        if col is None:
+            return None
+        cost += cinfo["cost"]
+        support = np.flatnonzero(col)
+        columns[int(j)] = (support, col[support], float(cinfo["bnorm_error"]))
+    mass = lap.mass
+    src = np.zeros(lap.n)
+    src_support, src_values, src_bound = columns[s]
+    src[src_support] = src_values
+    d2, bound = np.zeros(idx.size), np.zeros(idx.size)
+    for c, j in enumerate(idx):
+        if j == s:
+            continue
+        support, values, beta = columns[int(j)]
+        union = np.union1d(src_support, support)
+        diff = src[union]
+        diff[np.searchsorted(union, support)] -= values
+        d2[c] = float(mass[union] @ (diff * diff))
+        bound[c] = src_bound + beta
+    d = np.sqrt(d2)
+    bound = (bound + _norm_rounding(lap) * d) * (1.0 + 1e-12)
+    target = tol * np.sqrt(1.0 / mass[s] + 1.0 / mass[idx])
+    warn_missed("diffusion distance", np.where(idx == s, 0.0, bound), target, stacklevel=4)
+    info = bound_info(bound, "proof", "local", tol=tol, engine_method="local", cost=cost)
+    return _finish(d, info, np.arange(idx.size) if np.ndim(targets) else 0, idx.size, return_info)
 
 
 def _diagonal_step(lap, G2, e, delta, diagonal, method, tol, opts, progress):
@@ -511,6 +566,13 @@ def diffusion_distance(lap, t, source, targets=None, time_unit: str = "absolute"
     with :math:`K_t = e^{-t\tilde L}B^{-1}` the heat kernel (the survey's diffusion distance,
     with :math:`B^{-1}e_i` for the delta so that it converges under refinement): the filter
     passed to :func:`spectral_distance` is ``heat(t / 2)``.
+
+    With a few ``targets`` and ``method="auto"`` on a Metzler operator above
+    :data:`~spectral_igl.kernels.LOCAL_MIN_VERTICES` vertices, each distance is the B-norm of a
+    difference of two heat columns at time t/2 solved on regions around their sources
+    (:func:`~spectral_igl.local_heat_kernel`), with the sum of their proved B-norm bounds;
+    ``info["method"]`` is then ``"local"``. The one-to-all row needs the heat kernel
+    signature of every vertex and stays on the global diagonal.
 
     The survey's §6.2.1 (diffusion distances) and §6.3 (their discretization).
 

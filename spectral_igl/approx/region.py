@@ -40,8 +40,9 @@ from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as 
 from ..laplacian.units import dimension
 from .uniformization import rate_matrix, terms, uniformize, uniformize_blocks
 
-__all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches", "vertex_spacing", "heat_drift",
-           "first_radius", "first_radii", "MAX_FRACTION", "BUDGET", "GROWTH"]
+__all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
+           "vertex_spacing", "heat_drift", "first_radius", "first_radii", "MAX_FRACTION", "BUDGET", "GROWTH",
+           "FIRST_MARGIN"]
 
 #: largest share of the source's component a region grows to before it takes the whole
 #: component, and of all vertices before the column is declined (the global path's turn)
@@ -51,7 +52,10 @@ MAX_FRACTION = 0.25
 BUDGET = 200.0
 #: growth of the radius per attempt, at least
 GROWTH = 1.3
-
+#: a column's first region is this many times :func:`first_radius`: the Gaussian tail's radius
+#: along edges missed its goal by a factor 10--100 on scans (the ring distance overestimates the
+#: geodesic one), and a second attempt cost twice the first
+FIRST_MARGIN = 1.2
 
 
 def heat_drift(lap) -> float:
@@ -457,7 +461,7 @@ def region_heat_column(lap, t: float, source: int, tol: float, budget: float = B
 
     Notes
     -----
-    The region starts at :func:`first_radius` and grows by the Gaussian tail's law
+    The region starts at :data:`FIRST_MARGIN` times :func:`first_radius` and grows by the Gaussian tail's law
     (:math:`\log(1/m)` like the squared radius) until the bound of the module notes meets
     ``tol``; each attempt's cost is predicted before it runs (the Poisson terms at the region's
     rate times its share of the stored entries of L), so a declined column costs at most
@@ -485,17 +489,22 @@ def region_heat_column(lap, t: float, source: int, tol: float, budget: float = B
     # truncation of the series: at most tail / B_ss per entry, 1e-3 of the target in the B-norm
     tail = min(1e-3 * tol * math.sqrt(mass[source] / area), 1e-3)
     h2 = vertex_spacing(lap)
-    radius = first_radius(t, h2[source], goal)
+    plain = first_radius(t, h2[source], goal)
     limit = int(MAX_FRACTION * n)
     d = dimension(lap)
-    if d in (2, 3) and _ball_measure(radius, d) > MAX_FRACTION * area and size > limit:
+    if d in (2, 3) and _ball_measure(plain, d) > MAX_FRACTION * area and size > limit:
         # the first region would already be a flat ball of more than the share allowed: the
         # global path's turn, without growing a region ring by ring to find it out
-        return None, {"note": f"the first region's radius {radius:.3g} spans more than "
+        return None, {"note": f"the first region's radius {plain:.3g} spans more than "
                               f"{MAX_FRACTION:g} of the component's measure", "cost": 0.0}
+    radius, margined = FIRST_MARGIN * plain, True
     spent = 0.0
     while True:
         R, nearest_out = grow_region(L, h2, source, radius, limit=max(int(MAX_FRACTION * size), 1))
+        if margined and (R is None or R.size > limit):
+            radius, margined = plain, False         # the margin alone passed the share allowed
+            continue
+        margined = False
         if R is None:                               # no use growing further: the whole component
             R = np.flatnonzero(comp)
         whole = R.size == size
