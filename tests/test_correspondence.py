@@ -197,9 +197,11 @@ def test_bad_input():
 
 
 def test_a_part_is_matched_into_the_whole():
-    # the target is the source without a cap (ground truth: the kept vertices); with the
-    # squared eigenvalue differences as Laplacian mask the map was 0.26 (measured by the heat
-    # method; a random map: 0.43), with the resolvent mask 0.126
+    # the target is the source without a cap (ground truth: the kept vertices), measured by
+    # the heat method: 0.264 with the former default (squared eigenvalue differences as the
+    # Laplacian mask, weight 0.01), 0.187 with the resolvent mask at weight 0.1; a random
+    # map: 0.43. Other caps of this small shape are matched no better than at random by
+    # either (10 eigenfunctions do not tell a part of it from its mirror image)
     V, F = lumpy(3)
     keep = V[:, 1] < V[:, 1].max() - 0.25 * np.ptp(V[:, 1])
     G = F[np.all(keep[F], axis=1)]
@@ -208,4 +210,4 @@ def test_a_part_is_matched_into_the_whole():
     W, G, perm = permuted(W, G, seed=2)
     truth = kept[perm]
     res = sig.match_shapes((V, F), (W, G), k=10, k_final=30, n_descriptors=10, method="dense")
-    assert sig.map_error(V, F, res.p2p, truth, samples=None, method="heat") < 0.2
+    assert sig.map_error(V, F, res.p2p, truth, samples=None, method="heat") < 0.22

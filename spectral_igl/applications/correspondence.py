@@ -312,7 +312,7 @@ def _multiplication_operators(lap, evecs, D):
     return np.einsum("ni,np,nj->pij", BX, D, evecs, optimize=True)
 
 
-def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: float = 1e-2,
+def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: float = 1e-1,
                    commutativity_weight: float = 1e-2, laplacian_mask: str = "resolvent"):
     r"""The functional map :math:`C` (``k2 x k1``) that best carries the descriptors of shape 1
     onto those of shape 2 and commutes with the Laplacians.
@@ -646,7 +646,7 @@ class Correspondence:
 
 def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str = "wks",
                  n_descriptors: int = 100, grid: str = "own", landmarks=None,
-                 laplacian_weight: float = 1e-2, commutativity_weight: float = 1e-2,
+                 laplacian_weight: float = 1e-1, commutativity_weight: float = 1e-2,
                  laplacian_mask: str = "resolvent", refine: bool = True,
                  method: str = "auto") -> Correspondence:
     r"""A point map from ``lap2``'s vertices to ``lap1``'s, in one call.
