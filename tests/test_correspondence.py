@@ -94,8 +94,18 @@ def energy(C, A, Bh, M, P1, P2, w_d, w_l, w_p):
     return E + w_p * sum(np.sum((C @ a - b @ C) ** 2) for a, b in zip(P1, P2))
 
 
+def resolvent_mask(x, y, gamma=0.5):
+    """|R(x_j) - R(y_i)|^2, R(l) = 1 / ((l / max)^gamma - i) in real and imaginary parts."""
+    top = max(x.max(), y.max())
+    a, b = (x / top) ** gamma, (y / top) ** gamma
+    re = a[None, :] / (a[None, :] ** 2 + 1) - b[:, None] / (b[:, None] ** 2 + 1)
+    im = 1 / (a[None, :] ** 2 + 1) - 1 / (b[:, None] ** 2 + 1)
+    return re ** 2 + im ** 2
+
+
+@pytest.mark.parametrize("mask", ["squared", "resolvent"])
 @pytest.mark.parametrize("mu_d", [0.0, 0.5])
-def test_functional_map_minimises_its_energy(mu_d):
+def test_functional_map_minimises_its_energy(mu_d, mask):
     """The gradient of the documented energy vanishes at C, and C beats every perturbation."""
     V, F = lumpy(2)
     W, G = resample(V, F, 0.5, seed=3)
@@ -103,10 +113,12 @@ def test_functional_map_minimises_its_energy(mu_d):
     b1, b2 = sig.eigs(l1, 6), sig.eigs(l2, 5)
     rng = np.random.default_rng(0)
     D1, D2 = rng.random((l1.n, 4)), rng.random((l2.n, 4))
-    C = sig.functional_map(l1, l2, D1, D2, b1, b2, laplacian_weight=0.3, commutativity_weight=mu_d)
+    C = sig.functional_map(l1, l2, D1, D2, b1, b2, laplacian_weight=0.3, commutativity_weight=mu_d,
+                           laplacian_mask=mask)
     assert C.shape == (5, 6)
     A, Bh = b1[1].T @ l1.B @ D1, b2[1].T @ l2.B @ D2
-    M = (l1.area() * b1[0][None, :] - l2.area() * b2[0][:, None]) ** 2
+    x, y = l1.area() * np.abs(b1[0]), l2.area() * np.abs(b2[0])
+    M = (x[None, :] - y[:, None]) ** 2 if mask == "squared" else resolvent_mask(x, y)
     P1 = np.einsum("ni,np,nj->pij", l1.B @ b1[1], D1, b1[1])
     P2 = np.einsum("ni,np,nj->pij", l2.B @ b2[1], D2, b2[1])
     w = (1 / (4 * np.mean(Bh ** 2)), 0.3 / np.mean(M),
@@ -166,6 +178,8 @@ def test_bad_input():
         sig.functional_map(lap, lap, D, D, basis, (basis[0], basis[1][:5]))
     with pytest.raises(ValueError, match="laplacian_weight"):
         sig.functional_map(lap, lap, D, D, basis, basis, laplacian_weight=-1.0)
+    with pytest.raises(ValueError, match="laplacian_mask"):
+        sig.functional_map(lap, lap, D, D, basis, basis, laplacian_mask="cube")
     with pytest.raises(ValueError, match="p2p"):
         sig.zoomout(lap, np.arange(lap.n - 1), basis, basis)
     with pytest.raises(TypeError, match="p2p"):
@@ -180,3 +194,20 @@ def test_bad_input():
         sig.match_shapes(lap, lap, k=3, k_final=5, n_descriptors=4, landmarks=[1, 2])
     with pytest.raises(ValueError, match="C must be"):
         sig.point_map(np.ones(3), basis[1], basis[1])
+
+
+def test_a_part_is_matched_into_the_whole():
+    # the target is the source without a cap (ground truth: the kept vertices), measured by
+    # the heat method: 0.264 with the former default (squared eigenvalue differences as the
+    # Laplacian mask, weight 0.01), 0.187 with the resolvent mask at weight 0.1; a random
+    # map: 0.43. Other caps of this small shape are matched no better than at random by
+    # either (10 eigenfunctions do not tell a part of it from its mirror image)
+    V, F = lumpy(3)
+    keep = V[:, 1] < V[:, 1].max() - 0.25 * np.ptp(V[:, 1])
+    G = F[np.all(keep[F], axis=1)]
+    kept = np.unique(G)
+    W, G = V[kept], np.searchsorted(kept, G)
+    W, G, perm = permuted(W, G, seed=2)
+    truth = kept[perm]
+    res = sig.match_shapes((V, F), (W, G), k=10, k_final=30, n_descriptors=10, method="dense")
+    assert sig.map_error(V, F, res.p2p, truth, samples=None, method="heat") < 0.22

@@ -36,7 +36,7 @@ from ..laplacian.units import dimension
 from ..linalg import eigs
 
 __all__ = ["pair_descriptors", "landmark_descriptors", "functional_map", "point_map", "zoomout",
-           "map_error", "match_shapes", "Correspondence", "DESCRIPTORS", "GRIDS"]
+           "map_error", "match_shapes", "Correspondence", "DESCRIPTORS", "GRIDS", "LAPLACIAN_MASKS"]
 
 #: descriptor kinds :func:`pair_descriptors` computes
 DESCRIPTORS = ("wks", "hks")
@@ -44,6 +44,12 @@ DESCRIPTORS = ("wks", "hks")
 #: where the scales of :func:`pair_descriptors` come from: each shape's own spectrum, or one
 #: grid over the union of both bands
 GRIDS = ("own", "common")
+
+#: how :func:`functional_map` penalises the entries of C that do not commute with the Laplacians
+LAPLACIAN_MASKS = ("resolvent", "squared")
+
+#: exponent gamma of the resolvent mask (Ren et al. 2019's choice)
+RESOLVENT_GAMMA = 0.5
 
 
 # ----------------------------------------------------------------------------- validation
@@ -257,14 +263,57 @@ def _scale(values):
     return s if s > 0 else 1.0
 
 
+def _laplacian_mask(ev1, ev2, kind: str = "resolvent"):
+    r"""The weights :math:`M_{ij}` of the Laplacian commutativity term of a ``(k2, k1)`` map.
+
+    Parameters
+    ----------
+    ev1, ev2 : (k1,), (k2,) float
+        Eigenvalues of source and target at the same measure (e.g. both at unit area).
+    kind : {"resolvent", "squared"}
+        ``"squared"``: :math:`(\lambda^{(1)}_j - \lambda^{(2)}_i)^2`, the commutator
+        :math:`\|C\Lambda_1 - \Lambda_2 C\|^2`; ``"resolvent"`` (Ren et al. 2019):
+        :math:`|R(\lambda^{(1)}_j) - R(\lambda^{(2)}_i)|^2` with
+        :math:`R(\lambda) = (\tilde\lambda^{\gamma} - \mathrm i)^{-1}`,
+        :math:`\tilde\lambda = \lambda / \max(\lambda^{(1)}, \lambda^{(2)})`,
+        :math:`\gamma = 1/2`: the commutator with the resolvent of each Laplacian, bounded by 4.
+
+    Returns
+    -------
+    M : (k2, k1) float
+
+    Notes
+    -----
+    Both masks vanish on equal eigenvalues. The squared difference grows as
+    :math:`\lambda^2`, so that the last rows and columns of C carry nearly all of the
+    term and the low-frequency block, which decides the map, is barely constrained; the
+    resolvent grows as :math:`\lambda^{\gamma}` near zero and saturates, weighing the
+    whole band alike.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> M = _laplacian_mask(np.array([0.0, 1.0, 4.0]), np.array([0.0, 1.0, 4.0]))
+    >>> bool(np.allclose(np.diag(M), 0.0)), bool(M.max() <= 4.0)
+    (True, True)
+    """
+    kind = as_choice(kind, "laplacian_mask", LAPLACIAN_MASKS)
+    ev1, ev2 = np.abs(np.asarray(ev1, dtype=float)), np.abs(np.asarray(ev2, dtype=float))
+    if kind == "squared":
+        return np.square(ev1[None, :] - ev2[:, None])
+    top = max(float(ev1.max(initial=0.0)), float(ev2.max(initial=0.0)))
+    r1, r2 = ((ev / (top if top > 0 else 1.0)) ** RESOLVENT_GAMMA for ev in (ev1, ev2))
+    return np.square(np.abs(1.0 / (r1[None, :] - 1j) - 1.0 / (r2[:, None] - 1j)))
+
+
 def _multiplication_operators(lap, evecs, D):
     r""":math:`\Phi^\top B\, \mathrm{diag}(d)\, \Phi` for every column d of D: (p, k, k)."""
     BX = lap.B @ evecs
     return np.einsum("ni,np,nj->pij", BX, D, evecs, optimize=True)
 
 
-def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: float = 1e-2,
-                   commutativity_weight: float = 1e-2):
+def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: float = 1e-1,
+                   commutativity_weight: float = 1e-2, laplacian_mask: str = "resolvent"):
     r"""The functional map :math:`C` (``k2 x k1``) that best carries the descriptors of shape 1
     onto those of shape 2 and commutes with the Laplacians.
 
@@ -282,6 +331,8 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     commutativity_weight : float
         Weight :math:`\mu_D` of descriptor commutativity (0: not used; the problem then splits
         into one small solve per row of C).
+    laplacian_mask : {"resolvent", "squared"}
+        The weights M of the Laplacian commutativity (:func:`_laplacian_mask`).
 
     Returns
     -------
@@ -290,8 +341,9 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     Notes
     -----
     With :math:`A = \Phi_1^\top B_1 D_1` and :math:`\hat B = \Phi_2^\top B_2 D_2` the
-    descriptors' coefficients, :math:`M_{ij} = (|M_1|\lambda^{(1)}_j - |M_2|\lambda^{(2)}_i)^2`
-    (eigenvalues times the areas, invariant to scale) and
+    descriptors' coefficients, :math:`M` the mask of the eigenvalues times the areas
+    (invariant to scale; :func:`_laplacian_mask`, :math:`M_{ij} = (|M_1|\lambda^{(1)}_j -
+    |M_2|\lambda^{(2)}_i)^2` for ``"squared"``) and
     :math:`P^{(s)}_q = \Phi_s^\top B_s \operatorname{diag}(d^{(s)}_q)\Phi_s`, C minimises
 
     .. math:: \frac{\|CA - \hat B\|_F^2}{\tau_D}
@@ -332,7 +384,7 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     mu_d = as_nonnegative(commutativity_weight, "commutativity_weight")
     A, Bh = X1.T @ (lap1.B @ D1), X2.T @ (lap2.B @ D2)
     # eigenvalues times the area: the commutativity does not depend on the shapes' scales
-    M = np.square(lap1.area() * ev1[None, :] - lap2.area() * ev2[:, None])
+    M = _laplacian_mask(lap1.area() * ev1, lap2.area() * ev2, laplacian_mask)
     p = D1.shape[1]
     w_d, w_l = 1.0 / (p * _scale(np.square(Bh))), mu_l / _scale(M)
     G, R = w_d * (A @ A.T), w_d * (Bh @ A.T)                      # (k1, k1), (k2, k1)
@@ -594,8 +646,9 @@ class Correspondence:
 
 def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str = "wks",
                  n_descriptors: int = 100, grid: str = "own", landmarks=None,
-                 laplacian_weight: float = 1e-2, commutativity_weight: float = 1e-2,
-                 refine: bool = True, method: str = "auto") -> Correspondence:
+                 laplacian_weight: float = 1e-1, commutativity_weight: float = 1e-2,
+                 laplacian_mask: str = "resolvent", refine: bool = True,
+                 method: str = "auto") -> Correspondence:
     r"""A point map from ``lap2``'s vertices to ``lap1``'s, in one call.
 
     Eigenpairs (:func:`spectral_igl.eigs`, ``k_final`` of each shape), descriptors
@@ -604,12 +657,13 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     ``k_final`` (:func:`zoomout`), both shapes first scaled to unit area
     (:func:`unit_measure`). The fit solves
 
-    .. math:: \min_C \|C A_1 - A_2\|^2 + \mu_L \|C\Lambda_1 - \Lambda_2 C\|^2
+    .. math:: \min_C \|C A_1 - A_2\|^2 + \mu_L \|M^{1/2} \circ C\|^2
               + \mu_D \sum_p \|C P_{1,p} - P_{2,p} C\|^2,
 
-    :math:`A_i = \Phi_i^\top B_i D_i` the descriptors' coefficients, :math:`\Lambda_i` the
-    eigenvalues, :math:`P_{i,p} = \Phi_i^\top B_i\,\mathrm{diag}(d_{i,p})\,\Phi_i` the
-    descriptors as multiplication operators.
+    :math:`A_i = \Phi_i^\top B_i D_i` the descriptors' coefficients, M the Laplacian
+    commutativity mask of the eigenvalues (the resolvent's, or the squared differences),
+    :math:`P_{i,p} = \Phi_i^\top B_i\,\mathrm{diag}(d_{i,p})\,\Phi_i` the descriptors as
+    multiplication operators.
 
     Parameters
     ----------
@@ -627,6 +681,8 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     landmarks : (m, 2) int, optional
         Matched vertex pairs ``(source vertex, target vertex)``.
     laplacian_weight, commutativity_weight : float
+        See :func:`functional_map`.
+    laplacian_mask : {"resolvent", "squared"}
         See :func:`functional_map`.
     refine : bool
         Run ZoomOut (else the point map of the fitted map, in ``k`` eigenfunctions).
@@ -670,7 +726,8 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     seconds["descriptors"] = time.perf_counter() - t
     t = time.perf_counter()
     small1, small2 = (basis1[0][:k], basis1[1][:, :k]), (basis2[0][:k], basis2[1][:, :k])
-    C0 = functional_map(lap1, lap2, D1, D2, small1, small2, laplacian_weight, commutativity_weight)
+    C0 = functional_map(lap1, lap2, D1, D2, small1, small2, laplacian_weight, commutativity_weight,
+                        laplacian_mask)
     p2p = point_map(C0, basis1[1], basis2[1])
     seconds["fit"] = time.perf_counter() - t
     t = time.perf_counter()
