@@ -107,7 +107,7 @@ def main(argv=None):
     D2, _, info2 = sig.collection_distance_matrix(store, job, return_info=True)
     labels = np.array([label[n] for n in names])
     nn, mAP = sig.retrieval_scores(D, labels)
-    direct = sig.shape_distance_matrix([sig.shape_dna(sig.laplacian(*shapes[n]), k) for n in names],
+    direct = sig.shape_distance_matrix([sig.shape_dna(shapes[n], k) for n in names],
                                        "shape_dna")
     bent = [i for i, n in enumerate(names) if n.endswith("-bent")]
     bent = [bent[i] for i in np.linspace(0, len(bent) - 1, 3).round().astype(int)]   # three classes apart

@@ -151,6 +151,11 @@ def test_jobs_store_the_signatures_with_their_bounds(blob):
     assert arrays["shape_dna_abs_error"].shape == (8,) and bounds["bound_kind"] == "proof"
     assert Job.shape_dna(8).key() != Job.shape_dna(9).key()
     assert Job.heat_trace().params["times"] is None
+    # a collection gives ShapeDNA the Laplacian sig.shape_dna builds from a mesh, others the default
+    fem = sig.laplacian(*blob, **Job.shape_dna(8).laplacian_options())
+    assert np.array_equal(Job.shape_dna(8)("blob", fem)[0]["shape_dna"], sig.shape_dna(blob, 8))
+    assert Job.heat_trace().laplacian_options() == {"weights": "auto", "mass": "lumped"}
+    assert Job.shape_dna(8).laplacian_options(mass="lumped") == {"weights": "cotan", "mass": "lumped"}
 
 
 def test_bad_input_is_refused_with_a_message(blob):

@@ -550,7 +550,7 @@ def _worker_limits(client):
 
 
 def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progress: bool = True,
-        retries: int = 2, memory_limit="auto", weights: str = "auto", mass: str = "lumped",
+        retries: int = 2, memory_limit="auto", weights: str | None = None, mass: str | None = None,
         force: bool = False, retry_failed: bool = False) -> RunSummary:
     r"""Run ``job`` on every shape of ``inputs`` on dask.distributed; results in a Zarr store.
 
@@ -583,7 +583,10 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     memory_limit : str, int or float
         Per-worker limit of the local cluster (dask's syntax: ``"auto"`` shares the
         machine's memory, ``"4GB"``, bytes).
-    weights, mass : Laplacian options of :func:`spectral_igl.laplacian` (meshes).
+    weights, mass : str, optional
+        Laplacian options of :func:`spectral_igl.laplacian` (meshes); by default the job's
+        (:meth:`Job.laplacian_options`: ``"auto"`` and ``"lumped"``, finite elements for
+        :meth:`Job.shape_dna`).
     force : bool
         Recompute shapes whose stored result is current.
     retry_failed : bool
@@ -645,7 +648,7 @@ def run(inputs, job, out, *, workers: int | None = None, scheduler=None, progres
     out = os.fspath(out)
     if not isinstance(retries, (int, np.integer)) or isinstance(retries, bool) or retries < 0:
         raise ValueError(f"retries must be an integer >= 0, got {retries!r}")
-    options = {"weights": str(weights), "mass": str(mass)}
+    options = job.laplacian_options(weights, mass)
     ident = {"job": job.kind, "params": job.params, "laplacian": options}
     key = hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()
     for flag, value in (("progress", progress), ("force", force), ("retry_failed", retry_failed)):

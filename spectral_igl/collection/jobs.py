@@ -250,7 +250,9 @@ class Job:
     @classmethod
     def shape_dna(cls, k: int = 50, normalize: str | None = "shape"):
         """ShapeDNA: the first ``k`` certified eigenvalues times the shape's measure
-        (:func:`spectral_igl.shape_dna`). Stores ``"shape_dna"``: (k,) float and its bound
+        (:func:`spectral_igl.shape_dna`), of the finite-element Laplacian (cotan weights,
+        consistent mass) unless the run asks for other ``weights`` or ``mass``
+        (:meth:`laplacian_options`). Stores ``"shape_dna"``: (k,) float and its bound
         ``"shape_dna_abs_error"``.
         """
         if normalize is not None:
@@ -275,6 +277,28 @@ class Job:
             raise TypeError(f"params must be JSON-serialisable, got {params!r}: {err}") from None
         label = name or getattr(fn, "__qualname__", type(fn).__name__)
         return cls("function", {"function": label, "code": _source_digest(fn), "params": params}, fn)
+
+    def laplacian_options(self, weights: str | None = None, mass: str | None = None) -> dict:
+        """The options of :func:`spectral_igl.laplacian` this job's meshes are given:
+        ``weights`` and ``mass`` where set, else the job's own defaults, those of
+        :func:`spectral_igl.laplacian` (``"auto"``, ``"lumped"``) except for
+        :meth:`shape_dna`, computed with the finite elements ShapeDNA is defined with
+        (:data:`spectral_igl.applications.compare.SHAPE_DNA_LAPLACIAN`, as
+        :func:`spectral_igl.shape_dna` does from a mesh).
+
+        Examples
+        --------
+        >>> from spectral_igl.collection import Job
+        >>> Job.shape_dna(10).laplacian_options()
+        {'weights': 'cotan', 'mass': 'full'}
+        >>> Job.eigenvalues(4).laplacian_options(mass="full")
+        {'weights': 'auto', 'mass': 'full'}
+        """
+        from ..applications.compare import SHAPE_DNA_LAPLACIAN
+
+        own = SHAPE_DNA_LAPLACIAN if self.kind == "shape_dna" else {"weights": "auto", "mass": "lumped"}
+        return {"weights": str(own["weights"] if weights is None else weights),
+                "mass": str(own["mass"] if mass is None else mass)}
 
     # ---- identity -----------------------------------------------------------------------
     def key(self) -> str:
