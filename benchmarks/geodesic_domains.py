@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/geodesic_domains.py [--sources 5]
+    python benchmarks/geodesic_domains.py [--sources 12]
 
 Mean relative error |d - d*| / d* over all vertices (sources excluded), averaged over random
 sources, at unit area. d*: ``igl.exact_geodesic`` on the triangle mesh the polygons or points
@@ -61,7 +61,7 @@ def points(rng, n_sources):
     import potpourri3d as pp3d
 
     cases = [("unit sphere, 4000 random points", sphere_points(4000, seed=1), None)]
-    for name in ("spot.obj", "cow.obj", "homer.obj", "rocker-arm.obj"):
+    for name in ("spot.obj", "cow.obj", "homer.obj", "rocker-arm.obj", "fandisk.obj", "cheburashka.obj"):
         V, F = read_mesh(MESHES / name)
         cases.append((f"{name} vertices", V / np.sqrt(igl.doublearea(V, F).sum() / 2.0), F))
     for name, P, F in cases:
@@ -78,7 +78,7 @@ def points(rng, n_sources):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--sources", type=int, default=5)
+    p.add_argument("--sources", type=int, default=12)
     args = p.parse_args(argv)
     rng = np.random.default_rng(0)
     polygons(rng, args.sources)

@@ -133,11 +133,14 @@ class HeatGeodesics:
     (:func:`~spectral_igl.laplacian.points.local_triangles`), each with a third of its area
     (a triangle is in up to three fans), so that the Poisson matrix is the stiffness of the
     same gradient. Mean relative error against ``igl.exact_geodesic`` at the default t,
-    beside potpourri3d on the same input (5 random sources, unit area): horse_quad (quads,
-    exact on its triangulation) 2.0% (``PolygonMeshHeatSolver`` 29%, its
-    ``MeshHeatMethodDistanceSolver`` on the triangulated quads 2.6%); point clouds of the
-    vertices of spot 2.1% (``PointCloudHeatSolver`` 2.0%), cow 3.5% (3.7%), homer 5.9%
-    (6.0%), rocker-arm 2.1% (2.7%), 4,000 random points of the unit sphere 2.2% (1.9%).
+    beside potpourri3d on the same input (``benchmarks/geodesic_domains.py``: 12 random
+    sources, unit area): horse_quad (quads, exact on its triangulation) 1.8%
+    (``PolygonMeshHeatSolver`` 33%, its ``MeshHeatMethodDistanceSolver`` on the
+    triangulated quads 2.4%); point clouds of the vertices of spot 1.9%
+    (``PointCloudHeatSolver`` 2.0%), cow 6.3% (6.5%), homer 4.2% (4.1%), rocker-arm 2.4%
+    (2.4%), fandisk 2.5% (3.9%), cheburashka 2.7% (3.3%), 4,000 random points of the unit
+    sphere 2.2% (2.0%). Another draw of 12 sources moves both by up to 40% (homer 2.5%,
+    potpourri3d 2.4%); the sphere and homer stay behind potpourri3d in every draw measured.
 
     Parameters
     ----------
