@@ -351,8 +351,7 @@ def orientation_operators(lap, evecs, D):
     Gx, Gy = np.einsum("ma,mak->mk", gx, Xf), np.einsum("ma,mak->mk", gy, Xf)
     Dx, Dy = np.einsum("ma,map->mp", gx, Df), np.einsum("ma,map->mp", gy, Df)
     S = Xf.mean(axis=1) * area[:, None]                                # (m, k): int_t phi_i
-    return (np.einsum("mi,mp,mj->pij", S, Dx, Gy, optimize=True)
-            - np.einsum("mi,mp,mj->pij", S, Dy, Gx, optimize=True))
+    return np.stack([S.T @ (Dx[:, q, None] * Gy - Dy[:, q, None] * Gx) for q in range(D.shape[1])])
 
 
 def _commutator_normal(P1, P2):
@@ -364,7 +363,7 @@ def _commutator_normal(P1, P2):
     k1, k2 = P1.shape[1], P2.shape[1]
     N = np.kron(np.eye(k2), np.einsum("pij,pkj->ik", P1, P1))
     N += np.kron(np.einsum("pji,pjk->ik", P2, P2), np.eye(k1))
-    cross = np.einsum("pji,plk->ikjl", P2, P1).reshape(k1 * k2, k1 * k2)     # sum P2^T (x) P1^T
+    cross = np.tensordot(P2, P1, axes=(0, 0)).transpose(1, 3, 0, 2).reshape(k1 * k2, k1 * k2)  # sum P2^T (x) P1^T
     return N - cross - cross.T
 
 
