@@ -9,7 +9,9 @@ the target's vertices scrambled and the target rotated, and then one of:
 * ``noise``: the target displaced along its normals by N(0, (0.2% of its diagonal)^2);
 * ``topology``: the target glued at a few places (vertices close in space and far along the
   surface merged into one);
-* ``partial``: a limb cut off the target (the faces within a ball around its most eccentric vertex).
+* ``partial``: a limb cut off the target (the faces within a ball around its most eccentric vertex);
+  two more such rows: ``partial-2`` cuts the parent's second extremity (the most eccentric vertex
+  away from the first), ``partial-cow`` the first extremity of cow.obj (pair of 5000 / 6500 faces).
 
 The true map sends each target vertex to the source vertex nearest to it on the parent (before
 the rotation, stretch and noise). The error is the mean exact geodesic distance on the source
@@ -50,7 +52,11 @@ from spectral_igl.io import read_mesh
 
 HERE = Path(__file__).resolve().parent
 MESH = HERE.parent.parent / "shared" / "data" / "meshes" / "homer.obj"
-CLASSES = ("isometric", "stretch", "noise", "topology", "partial")
+CLASSES = ("isometric", "stretch", "noise", "topology", "partial", "partial-2", "partial-cow")
+#: rows other than a class of the parent mesh: (kind, parent mesh or None for --mesh, extremity,
+#: faces of source and target)
+ROWS = {"partial-2": ("partial", None, 1, (6000, 7800)),
+        "partial-cow": ("partial", MESH.parent / "cow.obj", 0, (5000, 6500))}
 K, K_FINAL, N_DESCR, SAMPLES = 30, 100, 100, 200
 
 
@@ -115,11 +121,17 @@ def glue(V, F, places=4, seed=0):
     return U, G, kept, done
 
 
-def cut_limb(V, F):
-    """The target without a limb: faces within a ball around the vertex farthest from the centre."""
+def cut_limb(V, F, extremity=0):
+    """The target without a limb: faces within a ball around an extremity. Extremity 0 is the
+    vertex farthest from the centre, extremity j the farthest among those more than two ball
+    radii from extremities 0 .. j-1."""
     c = V.mean(axis=0)
-    tip = np.argmax(np.linalg.norm(V - c, axis=1))
-    r = 0.35 * np.linalg.norm(V[tip] - c)
+    dist = np.linalg.norm(V - c, axis=1)
+    allowed = np.ones(len(V), bool)
+    for _ in range(extremity + 1):
+        tip = np.argmax(np.where(allowed, dist, -np.inf))
+        r = 0.35 * dist[tip]
+        allowed &= np.linalg.norm(V - V[tip], axis=1) > 2 * r
     far = np.linalg.norm(V - V[tip], axis=1) > r
     return largest_component(V, F[np.all(far[F], axis=1)])
 
@@ -129,8 +141,9 @@ def rotation(seed):
     return q * np.sign(np.linalg.det(q))
 
 
-def make_pair(V, F, kind, faces=(6000, 7800), seed=0):
-    """(V1, F1, V2, F2, truth): truth[y] is the source vertex of target vertex y."""
+def make_pair(V, F, kind, faces=(6000, 7800), seed=0, extremity=0):
+    """(V1, F1, V2, F2, truth): truth[y] is the source vertex of target vertex y; ``extremity``
+    chooses the limb a partial pair loses (:func:`cut_limb`)."""
     V1, F1, _ = remesh(V, F, faces[0], seed=1)
     V2, F2, _ = remesh(V, F, faces[1], seed=2)
     rest = V2.copy()
@@ -138,7 +151,7 @@ def make_pair(V, F, kind, faces=(6000, 7800), seed=0):
         V2, F2, kept, _ = glue(V2, F2, seed=seed)
         rest = rest[kept]
     if kind == "partial":
-        V2, F2, kept = cut_limb(V2, F2)
+        V2, F2, kept = cut_limb(V2, F2, extremity)
         rest = rest[kept]
     truth = cKDTree(V1).query(rest)[1]
     if kind == "stretch":
@@ -252,26 +265,33 @@ def grid_study(V, F):
 
 # ----------------------------------------------------------------------------- main
 
+def unit_mesh(path):
+    """The mesh at ``path`` scaled to unit area."""
+    V, F = read_mesh(str(path))
+    return V / np.sqrt(sig.laplacian(V, F).area()), F
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mesh", default=str(MESH), help="the parent mesh (default homer.obj)")
     ap.add_argument("--only", nargs="+", choices=CLASSES)
     ap.add_argument("--skip-studies", action="store_true", help="only the table against pyFM")
     args = ap.parse_args(argv)
-    V, F = read_mesh(args.mesh)
-    V = V / np.sqrt(sig.laplacian(V, F).area())
+    V, F = unit_mesh(args.mesh)
     print(f"# correspondence: {platform.processor() or platform.machine()}, {datetime.date.today()}, "
           f"OPENBLAS_NUM_THREADS=1 python {' '.join(sys.argv)}")
     print(f"parent {Path(args.mesh).name} ({len(V)} vertices); k = {K} -> {K_FINAL}, {N_DESCR} WKS energies\n")
     print("| class | n1 / n2 | ours error | pyFM error | random map | ours s: eigs / descr / fit / zoomout "
           "| pyFM s: eigs / descr / fit / zoomout |")
     print("|---|---|---|---|---|---|---|")
-    for kind in args.only or CLASSES:
-        V1, F1, V2, F2, truth = make_pair(V, F, kind)
+    for row in args.only or CLASSES:
+        kind, mesh, extremity, faces = ROWS.get(row, (row, None, 0, (6000, 7800)))
+        V0, F0 = (V, F) if mesh is None else unit_mesh(mesh)
+        V1, F1, V2, F2, truth = make_pair(V0, F0, kind, faces=faces, extremity=extremity)
         ours, s_ours = run_ours(V1, F1, V2, F2)
         pyfm, s_pyfm = run_pyfm(V1, F1, V2, F2)
         rand = np.random.default_rng(0).integers(0, len(V1), len(V2))
-        print(f"| {kind} | {len(V1)} / {len(V2)} | {error(V1, F1, ours, truth):.4f} | "
+        print(f"| {row} | {len(V1)} / {len(V2)} | {error(V1, F1, ours, truth):.4f} | "
               f"{error(V1, F1, pyfm, truth):.4f} | {error(V1, F1, rand, truth):.3f} | {fmt(s_ours)} | "
               f"{fmt(s_pyfm)} |", flush=True)
     if args.skip_studies:

@@ -24,6 +24,7 @@ reduced basis.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,11 +33,14 @@ from .._validate import as_array, as_choice, as_int, as_nonnegative, check_dense
 from ..descriptors import hks, hks_times, wks, wks_energies
 from ..kernels import heat_kernels
 from ..laplacian import as_laplacian, make_laplacian
+from ..laplacian.intrinsic import edge_lengths
+from ..laplacian.intrinsic_fem import frame_gradients
 from ..laplacian.units import dimension
 from ..linalg import eigs
 
 __all__ = ["pair_descriptors", "landmark_descriptors", "functional_map", "point_map", "zoomout",
-           "map_error", "match_shapes", "Correspondence", "DESCRIPTORS", "GRIDS", "LAPLACIAN_MASKS"]
+           "map_error", "match_shapes", "orientation_operators", "Correspondence", "DESCRIPTORS", "GRIDS",
+           "LAPLACIAN_MASKS"]
 
 #: descriptor kinds :func:`pair_descriptors` computes
 DESCRIPTORS = ("wks", "hks")
@@ -47,6 +51,9 @@ GRIDS = ("own", "common")
 
 #: how :func:`functional_map` penalises the entries of C that do not commute with the Laplacians
 LAPLACIAN_MASKS = ("resolvent", "squared")
+
+#: default weight of orientation preservation in :func:`functional_map` (triangle meshes)
+ORIENTATION_WEIGHT = 3e-2
 
 #: exponent gamma of the resolvent mask (Ren et al. 2019's choice)
 RESOLVENT_GAMMA = 0.5
@@ -312,8 +319,57 @@ def _multiplication_operators(lap, evecs, D):
     return np.einsum("ni,np,nj->pij", BX, D, evecs, optimize=True)
 
 
+def orientation_operators(lap, evecs, D):
+    r"""The orientation operators of the columns of ``D`` in the basis ``evecs``: (p, k, k).
+
+    Parameters
+    ----------
+    lap : Laplacian
+        A triangle mesh (its ``data["V"]``, ``data["F"]``); the faces' corner order is the
+        orientation.
+    evecs : (n, k) float
+    D : (n, p) float
+
+    Returns
+    -------
+    O : (p, k, k) float
+        :math:`O_q[i, j] = \int \phi_i\, \langle \nabla d_q \times \nabla \phi_j, n\rangle\, dA`.
+
+    Notes
+    -----
+    Ren et al. 2018: the operator :math:`g \mapsto \langle\nabla f\times\nabla g, n\rangle`
+    commutes with a map that preserves orientation and anticommutes with one that reverses it.
+    The hat-function gradients are laid out in each triangle's own plane (corner 0 at the
+    origin, corner 1 on the x axis, corner 2 above it: :func:`frame_gradients`), where
+    :math:`\langle a \times b, n\rangle = a_x b_y - a_y b_x` with n the normal of the corner
+    order; the integrand is constant on each triangle, and :math:`\int_t \phi_i = |t|` times
+    the mean of :math:`\phi_i` at its corners.
+    """
+    V, F = np.asarray(lap.data["V"], dtype=float), np.asarray(lap.data["F"], dtype=np.int64)
+    gx, gy, area = frame_gradients(edge_lengths(V, F))
+    Xf, Df = evecs[F], D[F]                                           # (m, 3, k), (m, 3, p)
+    Gx, Gy = np.einsum("ma,mak->mk", gx, Xf), np.einsum("ma,mak->mk", gy, Xf)
+    Dx, Dy = np.einsum("ma,map->mp", gx, Df), np.einsum("ma,map->mp", gy, Df)
+    S = Xf.mean(axis=1) * area[:, None]                                # (m, k): int_t phi_i
+    return np.stack([S.T @ (Dx[:, q, None] * Gy - Dy[:, q, None] * Gx) for q in range(D.shape[1])])
+
+
+def _commutator_normal(P1, P2):
+    r"""Normal matrix of :math:`\sum_q \|C P_{1,q} - P_{2,q} C\|_F^2` in row-major vec(C).
+
+    :math:`\operatorname{vec}(CP) = (I\otimes P^\top)\operatorname{vec}(C)`,
+    :math:`\operatorname{vec}(PC) = (P\otimes I)\operatorname{vec}(C)`; the operators need
+    not be symmetric."""
+    k1, k2 = P1.shape[1], P2.shape[1]
+    N = np.kron(np.eye(k2), np.einsum("pij,pkj->ik", P1, P1))
+    N += np.kron(np.einsum("pji,pjk->ik", P2, P2), np.eye(k1))
+    cross = np.tensordot(P2, P1, axes=(0, 0)).transpose(1, 3, 0, 2).reshape(k1 * k2, k1 * k2)  # sum P2^T (x) P1^T
+    return N - cross - cross.T
+
+
 def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: float = 1e-1,
-                   commutativity_weight: float = 1e-2, laplacian_mask: str = "resolvent"):
+                   commutativity_weight: float = 1e-2, laplacian_mask: str = "resolvent",
+                   orientation_weight: float | None = None):
     r"""The functional map :math:`C` (``k2 x k1``) that best carries the descriptors of shape 1
     onto those of shape 2 and commutes with the Laplacians.
 
@@ -329,10 +385,15 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     laplacian_weight : float
         Weight :math:`\mu_L` of the Laplacian commutativity term.
     commutativity_weight : float
-        Weight :math:`\mu_D` of descriptor commutativity (0: not used; the problem then splits
-        into one small solve per row of C).
+        Weight :math:`\mu_D` of descriptor commutativity (0: not used; with no orientation
+        term either, the problem then splits into one small solve per row of C).
     laplacian_mask : {"resolvent", "squared"}
         The weights M of the Laplacian commutativity (:func:`_laplacian_mask`).
+    orientation_weight : float, optional
+        Weight :math:`\mu_O` of orientation preservation (Ren et al. 2018,
+        :func:`orientation_operators`); 0: not used. It needs two triangle meshes: the default
+        is ``ORIENTATION_WEIGHT`` on them and 0 on other domains (point clouds, which carry no
+        orientation); a positive weight given for them is ignored with a warning.
 
     Returns
     -------
@@ -349,7 +410,9 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     .. math:: \frac{\|CA - \hat B\|_F^2}{\tau_D}
               + \mu_L \frac{\|M^{1/2} \circ C\|_F^2}{\tau_L}
               + \mu_D \sum_q \frac{\|C P^{(1)}_q - P^{(2)}_q C\|_F^2}{\tau_P}
+              + \mu_O \sum_q \frac{\|C O^{(1)}_q - O^{(2)}_q C\|_F^2}{\tau_O}
 
+    (:math:`O^{(s)}_q` the orientation operators of the descriptors, :func:`orientation_operators`)
     where each :math:`\tau` is the mean of the data of its term (the entries of
     :math:`\hat B^2`, of M, of the :math:`P_q^2`), times the number p of descriptors for the
     terms that sum over them, so that the weights do not depend on the shapes' size or scale. The
@@ -390,19 +453,28 @@ def functional_map(lap1, lap2, desc1, desc2, basis1, basis2, laplacian_weight: f
     G, R = w_d * (A @ A.T), w_d * (Bh @ A.T)                      # (k1, k1), (k2, k1)
     rows = [G + np.diag(w_l * M[i]) for i in range(ev2.size)]
     C = np.stack([np.linalg.solve(Gi, r) for Gi, r in zip(rows, R)])
-    if mu_d == 0:
+    meshes = lap1.domain == lap2.domain == "triangle"
+    if orientation_weight is None:
+        orientation_weight = ORIENTATION_WEIGHT if meshes else 0.0
+    mu_o = as_nonnegative(orientation_weight, "orientation_weight")
+    if mu_o > 0 and not meshes:
+        warnings.warn(f"orientation_weight={mu_o:g} ignored: orientation preservation needs two "
+                      f"triangle meshes, got {lap1.domain} and {lap2.domain} domains", stacklevel=2)
+        mu_o = 0.0
+    operators = []
+    if mu_d > 0:
+        operators.append((mu_d, _multiplication_operators(lap1, X1, D1), _multiplication_operators(lap2, X2, D2)))
+    if mu_o > 0:
+        operators.append((mu_o, orientation_operators(lap1, X1, D1), orientation_operators(lap2, X2, D2)))
+    if not operators:
         return C
     k2, k1 = C.shape
     check_dense_size(8.0 * (k1 * k2) ** 2, f"the normal equations of a {k2} x {k1} map with "
-                     "descriptor commutativity", "use fewer eigenpairs (refine with zoomout)")
-    P1, P2 = _multiplication_operators(lap1, X1, D1), _multiplication_operators(lap2, X2, D2)
-    w_p = mu_d / (p * _scale(np.square(np.concatenate([P1.ravel(), P2.ravel()]))))
-    # row-major vec(C): vec(C P) = (I (x) P^T) vec(C), vec(P C) = (P (x) I) vec(C), P symmetric
-    I1, I2 = np.eye(k1), np.eye(k2)
-    N = np.kron(I2, G + w_p * np.einsum("pij,pjk->ik", P1, P1))
-    N += w_p * np.kron(np.einsum("pij,pjk->ik", P2, P2), I1)
-    N -= 2.0 * w_p * np.einsum("pij,pkl->ikjl", P2, P1).reshape(k1 * k2, k1 * k2)
+                     "operator commutativity", "use fewer eigenpairs (refine with zoomout)")
+    N = np.kron(np.eye(k2), G)
     N[np.diag_indices_from(N)] += w_l * M.ravel()
+    for mu, P1, P2 in operators:
+        N += mu / (p * _scale(np.square(np.concatenate([P1.ravel(), P2.ravel()])))) * _commutator_normal(P1, P2)
     return np.linalg.solve(N, R.ravel()).reshape(k2, k1)
 
 
@@ -647,8 +719,8 @@ class Correspondence:
 def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str = "wks",
                  n_descriptors: int = 100, grid: str = "own", landmarks=None,
                  laplacian_weight: float = 1e-1, commutativity_weight: float = 1e-2,
-                 laplacian_mask: str = "resolvent", refine: bool = True,
-                 method: str = "auto") -> Correspondence:
+                 laplacian_mask: str = "resolvent", orientation_weight: float | None = None,
+                 refine: bool = True, method: str = "auto") -> Correspondence:
     r"""A point map from ``lap2``'s vertices to ``lap1``'s, in one call.
 
     Eigenpairs (:func:`spectral_igl.eigs`, ``k_final`` of each shape), descriptors
@@ -684,6 +756,9 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
         See :func:`functional_map`.
     laplacian_mask : {"resolvent", "squared"}
         See :func:`functional_map`.
+    orientation_weight : float, optional
+        Weight of orientation preservation (see :func:`functional_map`; by default on for
+        two triangle meshes, off otherwise).
     refine : bool
         Run ZoomOut (else the point map of the fitted map, in ``k`` eigenfunctions).
     method : str
@@ -727,7 +802,7 @@ def match_shapes(lap1, lap2, k: int = 30, k_final: int = 100, descriptors: str =
     t = time.perf_counter()
     small1, small2 = (basis1[0][:k], basis1[1][:, :k]), (basis2[0][:k], basis2[1][:, :k])
     C0 = functional_map(lap1, lap2, D1, D2, small1, small2, laplacian_weight, commutativity_weight,
-                        laplacian_mask)
+                        laplacian_mask, orientation_weight)
     p2p = point_map(C0, basis1[1], basis2[1])
     seconds["fit"] = time.perf_counter() - t
     t = time.perf_counter()
