@@ -360,54 +360,29 @@ def thousand(count, meshes, tmp, keep=None):
 
 
 # ---- a scheduler and workers started as separate processes -------------------------------------
-def _spawn(args, env, log):
-    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
-                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
-
-
 def loopback(paths, tmp, workers=3):
     """``dask scheduler`` and ``workers`` ``dask worker`` processes on 127.0.0.1; one worker
     killed at a third of the shapes and one added; the results against a 1-worker run."""
-    from distributed import Client
-
     from spectral_igl import collection
     from spectral_igl.collection import Job
 
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[1]),
-                                                       os.environ.get("PYTHONPATH", "")]),
-               DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED="False")   # as a local cluster's workers
-    sched_file, log = tmp / "scheduler.json", open(tmp / "cluster.log", "w")
-    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                     "--scheduler-file", str(sched_file)], env, log)]
-    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1", "--no-dashboard",
-              "--host", "127.0.0.1", "--memory-limit", "4GB"]
     out, ref = tmp / "loopback.zarr", tmp / "single.zarr"
     job = Job.function(hks_relative)
-    try:
-        while not sched_file.is_file():
-            time.sleep(0.1)
-        procs += [_spawn(worker, env, log) for _ in range(workers)]
-        with Client(scheduler_file=str(sched_file), timeout=30) as client:
-            client.wait_for_workers(workers, timeout=60)
-            box = {}
-            t = time.perf_counter()
-            th = threading.Thread(target=lambda: box.update(s=collection.run(
-                paths, job, out, scheduler=client, progress=False)))
-            th.start()
-            while th.is_alive() and sum(1 for p in out.glob("*") if not p.name.startswith(".")
-                                        and (p / "zarr.json").is_file()) < len(paths) // 3:
-                time.sleep(0.05)
-            os.killpg(procs[1].pid, signal.SIGKILL)
-            killed_at = time.perf_counter() - t
-            procs.append(_spawn(worker, env, log))
-            th.join()
-            wall = time.perf_counter() - t
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-        log.close()
+    with collection.LoopbackCluster(workers, folder=tmp / "cluster", memory_limit="4GB", timeout=60) as cluster, \
+            cluster.client() as client:
+        box = {}
+        t = time.perf_counter()
+        th = threading.Thread(target=lambda: box.update(s=collection.run(
+            paths, job, out, scheduler=client, progress=False)))
+        th.start()
+        while th.is_alive() and sum(1 for p in out.glob("*") if not p.name.startswith(".")
+                                    and (p / "zarr.json").is_file()) < len(paths) // 3:
+            time.sleep(0.05)
+        cluster.kill_worker(0)
+        killed_at = time.perf_counter() - t
+        cluster.add_worker()
+        th.join()
+        wall = time.perf_counter() - t
     s = box["s"]
     collection.run(paths, job, ref, workers=1, progress=False)
     a, b = collection.load(out).results, collection.load(ref).results

@@ -385,11 +385,6 @@ def _hks_slowly(name, lap):
     return sig.hks(lap, [0.01, 0.1])
 
 
-def _spawn(args, env, log):
-    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
-                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
-
-
 def test_scheduler_and_workers_on_loopback(tmp_path):
     """A separate scheduler and worker processes on 127.0.0.1, a worker killed and one added
     mid-run: every shape is done once, bitwise equal to the single-process result."""
@@ -397,45 +392,24 @@ def test_scheduler_and_workers_on_loopback(tmp_path):
 
     from spectral_igl.linalg.threads import blas_threads
 
-    root = Path(__file__).resolve().parents[1]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"),
-                                                       os.environ.get("PYTHONPATH", "")]),
-               OPENBLAS_NUM_THREADS="1")
-    sched_file = tmp_path / "scheduler.json"
-    log = open(tmp_path / "cluster.log", "w")
-    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                     "--scheduler-file", str(sched_file)], env, log)]
-    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
-              "--no-dashboard", "--host", "127.0.0.1", "--memory-limit", "2GB"]
     V, F = icosphere(3)
     shapes = {f"s{i:02d}": (V * (1.0 + 0.05 * i), F) for i in range(30)}
     out = tmp_path / "loop.zarr"
-    try:
-        deadline = time.time() + 20
-        while not sched_file.is_file() and time.time() < deadline:
-            time.sleep(0.1)
-        procs += [_spawn(worker, env, log), _spawn(worker, env, log)]
-        from distributed import Client
-
-        with Client(scheduler_file=str(sched_file), timeout=20) as client:
-            client.wait_for_workers(2, timeout=30)
-            result = {}
-            run = threading.Thread(target=lambda: result.update(s=collection.run(
-                shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
-            run.start()
-            while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
-                time.sleep(0.02)
-            os.killpg(procs[1].pid, signal.SIGKILL)          # a worker dies mid-run
-            procs.append(_spawn(worker, env, log))           # and another one joins
-            run.join(timeout=60)
-            assert not run.is_alive()
-            workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-        log.close()
+    # the scheduler unpickles the task graph: it imports what this module's functions refer to
+    tests = Path(__file__).resolve().parent
+    with collection.LoopbackCluster(workers=2, folder=tmp_path, extra_paths=[tests], timeout=30) as cluster, \
+            cluster.client() as client:
+        result = {}
+        run = threading.Thread(target=lambda: result.update(s=collection.run(
+            shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
+        run.start()
+        while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
+            time.sleep(0.02)
+        cluster.kill_worker(0)             # a worker dies mid-run
+        cluster.add_worker()               # and another one joins
+        run.join(timeout=60)
+        assert not run.is_alive()
+        workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
     s = result["s"]
     assert sorted(s.done) == sorted(shapes) and s.ok, str(s)
     assert len(workers_seen) >= 2
@@ -444,6 +418,18 @@ def test_scheduler_and_workers_on_loopback(tmp_path):
         with blas_threads(1):
             expect = sig.hks(sig.laplacian(Vi, Fi), [0.01, 0.1])
         assert np.array_equal(res[name]["result"], expect), name
+
+
+def test_loopback_cluster_arguments_and_clean_up(tmp_path):
+    """Bad arguments are refused by name, and leaving the context kills every process."""
+    with pytest.raises(ValueError, match="workers"):
+        collection.LoopbackCluster(workers=-1)
+    with collection.LoopbackCluster(workers=0, folder=tmp_path) as cluster:
+        assert cluster.scheduler_file.is_file()
+        with pytest.raises(ValueError, match="index"):
+            cluster.kill_worker(0)
+    assert all(p.poll() is not None for p in cluster.processes)
+    assert tmp_path.is_dir()             # a folder given is kept (its log is there)
 
 
 def test_store_writes_arrays_zarr_reads(tmp_path):
