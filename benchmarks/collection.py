@@ -138,22 +138,25 @@ def cluster_start(workers):
 
 
 def task_times(out):
-    """Per-shape timings of a store: sums of wall and CPU inside the tasks, CPU per worker,
-    and the shapes each worker computed."""
+    """Per-shape timings of a store: sums of wall and CPU inside the tasks (the task's
+    process and its own thread), CPU per worker, the shapes each worker computed, and each
+    worker's first task start, last task end and busy wall (seconds since the epoch)."""
     from spectral_igl import collection
 
     res = collection.load(out, arrays=False).results
-    inside = sum(r.meta["timings"]["total"] for r in res.values())
-    cpu = sum(r.meta["timings"]["cpu"] for r in res.values())
-    job_cpu = sum(r.meta["timings"].get("compute_cpu", 0.0) for r in res.values())
-    compute = sum(r.meta["timings"].get("compute", 0.0) for r in res.values())
-    per_worker, split = {}, {}
+    sums = {k: sum(r.meta["timings"].get(k, 0.0) for r in res.values())
+            for k in ("total", "cpu", "thread_cpu", "compute_cpu", "compute_thread_cpu", "compute")}
+    per_worker, split, span = {}, {}, {}
     for name, r in res.items():
-        key = (r.meta["host"], r.meta["pid"])
-        per_worker[key] = per_worker.get(key, 0.0) + r.meta["timings"]["cpu"]
+        key, t = (r.meta["host"], r.meta["pid"]), r.meta["timings"]
+        per_worker[key] = per_worker.get(key, 0.0) + t["cpu"]
         split.setdefault(key, []).append(name)
-    return dict(inside=inside, cpu=cpu, job_cpu=job_cpu, compute=compute, per_worker=per_worker,
-                split=list(split.values()), n=len(res))
+        first, last, busy = span.get(key, (np.inf, -np.inf, 0.0))
+        span[key] = (min(first, t["started"]), max(last, t["started"] + t["total"]), busy + t["total"])
+    return dict(inside=sums["total"], cpu=sums["cpu"], thread_cpu=sums["thread_cpu"],
+                job_cpu=sums["compute_cpu"], job_thread_cpu=sums["compute_thread_cpu"],
+                compute=sums["compute"], per_worker=per_worker, split=list(split.values()),
+                span=list(span.values()), n=len(res))
 
 
 def timed_run(inputs, job, out, workers, **kw):
@@ -161,9 +164,9 @@ def timed_run(inputs, job, out, workers, **kw):
 
     shutil.rmtree(out, ignore_errors=True)
     c0 = client_cpu()
-    t = time.perf_counter()
+    e0, t = time.time(), time.perf_counter()
     s = collection.run(inputs, job, out, workers=workers, progress=False, **kw)
-    wall = time.perf_counter() - t
+    wall, e1 = time.perf_counter() - t, time.time()
     ccpu = client_cpu() - c0
     assert s.ok, str(s)
     tt = task_times(out)
@@ -171,7 +174,21 @@ def timed_run(inputs, job, out, workers, **kw):
     s2 = collection.run(inputs, job, out, workers=workers, progress=False)
     rerun = time.perf_counter() - t
     assert len(s2.skipped) == tt["n"]
-    return dict(wall=wall, client_cpu=ccpu, rerun=rerun, **tt)
+    return dict(wall=wall, client_cpu=ccpu, rerun=rerun, epoch=(e0, e1), **tt)
+
+
+def timeline(r) -> str:
+    """Where a run's wall went: until each worker's first task (cluster start, the worker's
+    imports, dispatch), inside tasks, between tasks, idle at the end, after the last task."""
+    e0, e1 = r["epoch"]
+    span = sorted(r["span"])
+    end = max(last for _, last, _ in span)
+    firsts = " / ".join(f"{first - e0:.2f}" for first, _, _ in span)
+    busy = " / ".join(f"{b:.2f}" for _, _, b in span)
+    gaps = " / ".join(f"{last - first - b:.2f}" for first, last, b in span)
+    idle = " / ".join(f"{end - last:.2f}" for _, last, _ in span)
+    return (f"first task at {firsts} s, inside tasks {busy} s, between tasks {gaps} s, idle at the end "
+            f"{idle} s (per worker); after the last task {e1 - end:.2f} s (stop); wall {e1 - e0:.2f} s")
 
 
 def speed_table(paths, tmp):
@@ -181,31 +198,48 @@ def speed_table(paths, tmp):
     job = Job.function(hks_relative)
     print(f"load average before: {load_avg()}")
     lw, lc, ljob, per_shape = plain_loop(paths, hks_relative)
+    fresh = parallel_loops([paths])[1][0]        # the same loop as a script: a fresh process
+    imports = fresh["import_cpu"]
     n = len(paths)
     print("\n| | wall (s) | shapes per minute | CPU (s): tasks / busiest worker / client | job CPU in-task / loop "
-          f"| predicted on {cores} quiet cores, without / with the cluster start (s) | predicted speed-up "
-          "over the loop, without / with | rerun, all skipped (s) |")
+          f"| predicted on {cores} quiet cores: without start / with start, stop and imports (s) "
+          "| predicted speed-up over the loop: without / with / with, over the loop as a script "
+          "| rerun, all skipped (s) |")
     print("|---|---|---|---|---|---|---|---|")
     print(f"| plain loop | {lw:.1f} | {60 * n / lw:.0f} | {lc:.1f} | 1 | {lc:.1f} | 1 | |")
+    print(f"| plain loop as a script (fresh process, imports {imports:.2f} s CPU apart) | {fresh['wall']:.1f} | "
+          f"{60 * n / fresh['wall']:.0f} | {fresh['cpu']:.1f} + {imports:.2f} | "
+          f"{fresh['job_cpu'] / ljob:.2f} | {fresh['cpu'] + imports:.1f} | | |")
+    lines = []
     for w in (1, 2):
         up, updown = cluster_start(w)
         r = timed_run(paths, job, tmp / f"w{w}.zarr", w)
         busiest = max(r["per_worker"].values())
         # the client's CPU includes the cluster's start and stop (and, locally, the scheduler)
         pred = max(busiest, (r["cpu"] + r["client_cpu"]) / cores)
+        full = pred + updown + imports
         print(f"| run, {w} worker{'s' if w > 1 else ''} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
               f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
-              f"{pred:.1f} / {pred + updown:.1f} | {lc / pred:.2f} / {lc / (pred + updown):.2f} | "
-              f"{r['rerun']:.2f} |")
-    ceiling(paths, r["split"], per_shape, lc, cores)
+              f"{pred:.1f} / {full:.1f} | {lc / pred:.2f} / {lc / full:.2f} / "
+              f"{(lc + imports) / full:.2f} | {r['rerun']:.2f} |")
+        lines.append(f"{w} worker(s): {timeline(r)}; cluster start {up:.2f} s and stop {updown - up:.2f} s "
+                     f"measured apart")
+        lines.append(f"{w} worker(s): job CPU {r['job_cpu']:.2f} s in the tasks' processes, "
+                     f"{r['job_thread_cpu']:.2f} s in the task threads (the loop: {ljob:.2f} s); all tasks "
+                     f"{r['cpu']:.2f} s, {r['thread_cpu']:.2f} s in the task threads")
+    print()
+    for line in lines:
+        print(line)
+    ceiling(paths, r["split"], per_shape, lc, cores, updown, imports)
     print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; cluster start + stop measured apart; "
           f"load average after: {load_avg()}")
 
 
-def ceiling(paths, split, per_shape, loop_cpu, cores):
+def ceiling(paths, split, per_shape, loop_cpu, cores, updown, imports):
     """The row "two plain loops in parallel": the shapes of each worker of the last run, each
     in a plain loop in its own process, both at once, against each set alone in a fresh
-    process just before (the same conditions); and the largest shape's share."""
+    process just before (the same conditions); and the bound the largest shape, the
+    cluster's start and stop and the workers' imports set."""
     by_name = {Path(p).stem: p for p in paths}
     halves = [[by_name[k] for k in names] for names in split]
     alone = [parallel_loops([half])[1][0] for half in halves]
@@ -214,7 +248,7 @@ def ceiling(paths, split, per_shape, loop_cpu, cores):
     solo_job = sum(r["job_cpu"] for r in alone)
     busiest = max(r["cpu"] for r in res)
     cpu = sum(r["cpu"] for r in res)
-    print(f"| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
+    print(f"\n| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
           f"{60 * len(paths) / wall:.0f} | {cpu:.1f} / {busiest:.1f} / | "
           f"{sum(r['job_cpu'] for r in res) / solo_job:.2f} | {busiest:.1f} / | "
           f"{loop_cpu / busiest:.2f} / | |")
@@ -224,9 +258,12 @@ def ceiling(paths, split, per_shape, loop_cpu, cores):
         f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; each worker pays them)")
     name, (big, _) = max(per_shape.items(), key=lambda kv: kv[1][0])
     bound = max(big, loop_cpu / cores)
-    print(f"largest shape: {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
+    full = bound + updown + imports
+    print(f"ceiling: largest shape {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
           f"({100 * big / loop_cpu:.0f} %): on {cores} workers at best {bound:.2f} s, a speed-up of at most "
-          f"{loop_cpu / bound:.2f}")
+          f"{loop_cpu / bound:.2f}; with the cluster's start and stop ({updown:.2f} s) and a worker's "
+          f"imports ({imports:.2f} s CPU) at best {full:.2f} s: at most {loop_cpu / full:.2f} over the loop, "
+          f"{(loop_cpu + imports) / full:.2f} over the loop as a script")
 
 
 def overhead(n_small, tmp):

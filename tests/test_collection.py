@@ -358,25 +358,35 @@ def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
 
 
 def _worker_state(name, lap):
-    """Tasks the worker running this shape holds unfinished, and whether it samples stacks."""
+    """Tasks the worker running this shape holds unfinished, whether it samples stacks, and
+    the periods (ms) of its tick and memory monitors."""
     from distributed import get_worker
 
     w = get_worker()
     held = sum(ts.state in ("waiting", "ready", "constrained", "executing") for ts in w.state.tasks.values())
-    return np.array([held, "profile" in w.periodic_callbacks], dtype=float)
+    pc = w.periodic_callbacks
+    return np.array([held, "profile" in pc, pc["tick"].callback_time, pc["memory_monitor"].callback_time],
+                    dtype=float)
 
 
 def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
     """A worker gets its next task only when it has finished one (a task queued on a busy
-    worker cannot move to an idle one), and a local cluster's workers run no sampling profiler."""
+    worker cannot move to an idle one), and a local cluster's workers run no sampling profiler
+    and wake their event loop's monitors as WORKER_CONFIG says."""
+    from dask.utils import parse_timedelta
+
+    from spectral_igl.collection.engine import WORKER_CONFIG
+
     V, F = icosphere(0)
     shapes = {f"s{i:02d}": (V * (1 + 0.01 * i), F) for i in range(12)}     # 4 batches of 3
     s = collection.run(shapes, Job.function(_worker_state), tmp_path / "w.zarr", workers=1, progress=False)
     assert s.ok and sorted(s.done) == sorted(shapes)
     states = np.array([r["result"] for r in collection.load(tmp_path / "w.zarr").results.values()])
-    assert states.shape == (12, 2)
+    assert states.shape == (12, 4)
     assert np.all(states[:, 0] == 1), states[:, 0]
     assert not np.any(states[:, 1])
+    for col, key in ((2, "distributed.admin.tick.interval"), (3, "distributed.worker.memory.monitor-interval")):
+        assert np.all(states[:, col] == 1000 * parse_timedelta(WORKER_CONFIG[key])), (key, states[:, col])
 
 
 def _hks_slowly(name, lap):
