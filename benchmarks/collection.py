@@ -28,7 +28,6 @@ many small shapes: (wall − cluster start − time inside the tasks / workers) 
 from __future__ import annotations
 
 import argparse
-import logging
 import os
 import resource
 import shutil
@@ -124,17 +123,49 @@ def parallel_loops(halves):
     return wall, results
 
 
-def cluster_start(workers):
-    from distributed import Client, LocalCluster
+# ``collection.run`` as a script: a fresh process imports, runs once, prints JSON
+_RUN_ONE = """
+import json, resource, sys, time
+t0 = time.perf_counter()
+sys.path.insert(0, sys.argv[1])
+from collection import hks_relative, n_vertices, small_shapes
+from spectral_igl import collection
+from spectral_igl.collection import Job
+if __name__ == "__main__":
+    spec = json.loads(sys.stdin.readline())
+    inputs = small_shapes(spec["small"]) if spec["small"] else spec["paths"]
+    job = Job.function(hks_relative if spec["job"] == "hks" else n_vertices)
+    imports = time.perf_counter() - t0
+    r0 = resource.getrusage(resource.RUSAGE_SELF)
+    e0, t = time.time(), time.perf_counter()
+    s = collection.run(inputs, job, spec["out"], workers=spec["workers"], progress=False)
+    wall, e1 = time.perf_counter() - t, time.time()
+    r1 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu = r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime
+    print(json.dumps(dict(ok=s.ok, wall=wall, epoch=[e0, e1], client_cpu=cpu, client_imports=imports)))
+"""
 
-    t = time.perf_counter()
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
-    client = Client(cluster)
-    up = time.perf_counter() - t
-    client.close()
-    cluster.close()
-    return up, time.perf_counter() - t
+
+def small_shapes(count):
+    """``count`` copies of a 42-vertex sphere, each scaled a little (distinct inputs)."""
+    from data_generators import icosphere
+
+    V, F = icosphere(1)
+    return [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(count)]
+
+
+def run_as_script(out, workers, job="hks", paths=(), small=0):
+    """``collection.run`` in a fresh process, as a user's script runs it (the client's
+    imports apart): wall, epoch of start and end, the client's CPU during the run (it also
+    runs the scheduler and starts the cluster)."""
+    import json
+
+    spec = dict(out=str(out), workers=workers, job=job, paths=list(paths), small=small)
+    proc = subprocess.run([sys.executable, "-c", _RUN_ONE, str(Path(__file__).parent)], input=json.dumps(spec),
+                          capture_output=True, text=True, check=True)
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert res["ok"], proc.stderr[-2000:]
+    return res
 
 
 def task_times(out):
@@ -159,22 +190,25 @@ def task_times(out):
                 span=list(span.values()), n=len(res))
 
 
-def timed_run(inputs, job, out, workers, **kw):
+def timed_run(out, workers, job="hks", paths=(), small=0):
+    """A run as a script (:func:`run_as_script`), its store's task timings, and a rerun in
+    this process that skips everything."""
     from spectral_igl import collection
+    from spectral_igl.collection import Job
 
     shutil.rmtree(out, ignore_errors=True)
-    c0 = client_cpu()
-    e0, t = time.time(), time.perf_counter()
-    s = collection.run(inputs, job, out, workers=workers, progress=False, **kw)
-    wall, e1 = time.perf_counter() - t, time.time()
-    ccpu = client_cpu() - c0
-    assert s.ok, str(s)
+    r = run_as_script(out, workers, job, paths, small)
     tt = task_times(out)
+    inputs = small_shapes(small) if small else list(paths)
     t = time.perf_counter()
-    s2 = collection.run(inputs, job, out, workers=workers, progress=False)
+    s2 = collection.run(inputs, Job.function(hks_relative if job == "hks" else n_vertices), out,
+                        workers=workers, progress=False)
     rerun = time.perf_counter() - t
     assert len(s2.skipped) == tt["n"]
-    return dict(wall=wall, client_cpu=ccpu, rerun=rerun, epoch=(e0, e1), **tt)
+    e0, e1 = r["epoch"]
+    end = max(last for _, last, _ in tt["span"])
+    start = min(first for first, _, _ in tt["span"]) - e0
+    return dict(r, rerun=rerun, start=start, stop=e1 - end, **tt)
 
 
 def timeline(r) -> str:
@@ -187,55 +221,47 @@ def timeline(r) -> str:
     busy = " / ".join(f"{b:.2f}" for _, _, b in span)
     gaps = " / ".join(f"{last - first - b:.2f}" for first, last, b in span)
     idle = " / ".join(f"{end - last:.2f}" for _, last, _ in span)
-    return (f"first task at {firsts} s, inside tasks {busy} s, between tasks {gaps} s, idle at the end "
-            f"{idle} s (per worker); after the last task {e1 - end:.2f} s (stop); wall {e1 - e0:.2f} s")
+    return (f"first task at {firsts} s (cluster start, a worker's imports, dispatch), inside tasks {busy} s, "
+            f"between tasks {gaps} s, idle at the end {idle} s (per worker); after the last task "
+            f"{e1 - end:.2f} s (stop); wall {e1 - e0:.2f} s")
 
 
 def speed_table(paths, tmp):
-    from spectral_igl.collection import Job
-
     cores = os.cpu_count() or 1
-    job = Job.function(hks_relative)
     print(f"load average before: {load_avg()}")
     lw, lc, ljob, per_shape = plain_loop(paths, hks_relative)
     fresh = parallel_loops([paths])[1][0]        # the same loop as a script: a fresh process
-    imports = fresh["import_cpu"]
     n = len(paths)
     print("\n| | wall (s) | shapes per minute | CPU (s): tasks / busiest worker / client | job CPU in-task / loop "
-          f"| predicted on {cores} quiet cores: without start / with start, stop and imports (s) "
-          "| predicted speed-up over the loop: without / with / with, over the loop as a script "
-          "| rerun, all skipped (s) |")
+          f"| predicted on {cores} quiet cores, without / with start and stop (s) "
+          "| predicted speed-up over the loop, without / with | rerun, all skipped (s) |")
     print("|---|---|---|---|---|---|---|---|")
     print(f"| plain loop | {lw:.1f} | {60 * n / lw:.0f} | {lc:.1f} | 1 | {lc:.1f} | 1 | |")
-    print(f"| plain loop as a script (fresh process, imports {imports:.2f} s CPU apart) | {fresh['wall']:.1f} | "
-          f"{60 * n / fresh['wall']:.0f} | {fresh['cpu']:.1f} + {imports:.2f} | "
-          f"{fresh['job_cpu'] / ljob:.2f} | {fresh['cpu'] + imports:.1f} | | |")
+    print(f"| plain loop as a script | {fresh['wall']:.1f} | {60 * n / fresh['wall']:.0f} | {fresh['cpu']:.1f} | "
+          f"{fresh['job_cpu'] / ljob:.2f} | {fresh['cpu']:.1f} | {lc / fresh['cpu']:.2f} | |")
     lines = []
     for w in (1, 2):
-        up, updown = cluster_start(w)
-        r = timed_run(paths, job, tmp / f"w{w}.zarr", w)
+        r = timed_run(tmp / f"w{w}.zarr", w, paths=paths)
         busiest = max(r["per_worker"].values())
         # the client's CPU includes the cluster's start and stop (and, locally, the scheduler)
         pred = max(busiest, (r["cpu"] + r["client_cpu"]) / cores)
-        full = pred + updown + imports
+        full = pred + r["start"] + r["stop"]
         print(f"| run, {w} worker{'s' if w > 1 else ''} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
               f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
-              f"{pred:.1f} / {full:.1f} | {lc / pred:.2f} / {lc / full:.2f} / "
-              f"{(lc + imports) / full:.2f} | {r['rerun']:.2f} |")
-        lines.append(f"{w} worker(s): {timeline(r)}; cluster start {up:.2f} s and stop {updown - up:.2f} s "
-                     f"measured apart")
+              f"{pred:.1f} / {full:.1f} | {lc / pred:.2f} / {lc / full:.2f} | {r['rerun']:.2f} |")
+        lines.append(f"{w} worker(s): {timeline(r)}")
         lines.append(f"{w} worker(s): job CPU {r['job_cpu']:.2f} s in the tasks' processes, "
                      f"{r['job_thread_cpu']:.2f} s in the task threads (the loop: {ljob:.2f} s); all tasks "
                      f"{r['cpu']:.2f} s, {r['thread_cpu']:.2f} s in the task threads")
-    print()
+    print(f"\nimports before the first shape, a fresh process: the loop's {fresh['import_cpu']:.2f} s CPU, "
+          f"the run's client {r['client_imports']:.2f} s wall (both left out of the rows)")
     for line in lines:
         print(line)
-    ceiling(paths, r["split"], per_shape, lc, cores, updown, imports)
-    print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; cluster start + stop measured apart; "
-          f"load average after: {load_avg()}")
+    ceiling(paths, r["split"], per_shape, lc, cores, r["start"] + r["stop"])
+    print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; load average after: {load_avg()}")
 
 
-def ceiling(paths, split, per_shape, loop_cpu, cores, updown, imports):
+def ceiling(paths, split, per_shape, loop_cpu, cores, startstop):
     """The row "two plain loops in parallel": the shapes of each worker of the last run, each
     in a plain loop in its own process, both at once, against each set alone in a fresh
     process just before (the same conditions); and the bound the largest shape, the
@@ -255,32 +281,25 @@ def ceiling(paths, split, per_shape, loop_cpu, cores, updown, imports):
     print("\nparallel loops: CPU of each half " + ", ".join(
         f"{r['cpu']:.2f} s against {s:.2f} s alone ({r['cpu'] / s:.2f}x)" for r, s in zip(res, solo))
         + "; a fresh process's imports before the first shape "
-        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; each worker pays them)")
+        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; a local run's workers are forked from a server that has imported them)")
     name, (big, _) = max(per_shape.items(), key=lambda kv: kv[1][0])
     bound = max(big, loop_cpu / cores)
-    full = bound + updown + imports
+    full = bound + startstop
     print(f"ceiling: largest shape {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
           f"({100 * big / loop_cpu:.0f} %): on {cores} workers at best {bound:.2f} s, a speed-up of at most "
-          f"{loop_cpu / bound:.2f}; with the cluster's start and stop ({updown:.2f} s) and a worker's "
-          f"imports ({imports:.2f} s CPU) at best {full:.2f} s: at most {loop_cpu / full:.2f} over the loop, "
-          f"{(loop_cpu + imports) / full:.2f} over the loop as a script")
+          f"{loop_cpu / bound:.2f}; with the last run's wall before its first task and after its last "
+          f"({startstop:.2f} s: cluster start, a worker's imports, stop) at best {full:.2f} s, a speed-up of "
+          f"at most {loop_cpu / full:.2f}")
 
 
 def overhead(n_small, tmp):
-    from data_generators import icosphere
-
-    from spectral_igl.collection import Job
-
-    V, F = icosphere(1)
-    small = [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(n_small)]
     for w in (1, 2):
-        up, updown = cluster_start(w)
-        r = timed_run(small, Job.function(n_vertices), tmp / f"o{w}.zarr", w)
-        over = (r["wall"] - updown - r["compute"] / w) / len(small)
-        print(f"overhead, {len(small)} shapes of {len(V)} vertices, {w} worker(s): wall {r['wall']:.2f} s, "
-              f"cluster start + stop {updown:.2f} s, job inside the tasks {r['compute']:.3f} s, "
-              f"task CPU {1e3 * r['cpu'] / len(small):.1f} ms/shape, client CPU "
-              f"{1e3 * r['client_cpu'] / len(small):.1f} ms/shape (with the cluster's start): "
+        r = timed_run(tmp / f"o{w}.zarr", w, job="n", small=n_small)
+        over = (r["wall"] - r["start"] - r["stop"] - r["compute"] / w) / n_small
+        print(f"overhead, {n_small} shapes of 42 vertices, {w} worker(s): wall {r['wall']:.2f} s, of which "
+              f"{r['start']:.2f} s before the first task and {r['stop']:.2f} s after the last, job inside the "
+              f"tasks {r['compute']:.3f} s, task CPU {1e3 * r['cpu'] / n_small:.1f} ms/shape, client CPU "
+              f"{1e3 * r['client_cpu'] / n_small:.1f} ms/shape (with the cluster's start): "
               f"{1e3 * over:.1f} ms per shape; load {load_avg()}")
 
 

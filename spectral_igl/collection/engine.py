@@ -523,13 +523,42 @@ WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
                  "distributed.worker.memory.monitor-interval": "500ms"}
 
 
+#: modules the fork server of a local cluster's workers imports (once, for every worker)
+WORKER_PRELOAD = ["distributed", "spectral_igl.collection.preload"]
+
+
+def _fork_server() -> dict:
+    """dask's setting that forks a local cluster's workers from a server that has imported
+    :data:`WORKER_PRELOAD`, where the platform has one (else none: dask spawns them).
+
+    A spawned worker imports distributed and this package itself, each worker again
+    (0.4–0.6 s of CPU measured), and pays the first call of the compiled extensions in its
+    first task; forked from the server, it starts with them. The server lives as long as
+    this process, so the workers of a later run fork from it too. (A worker that its nanny
+    restarts after it died is spawned: the nanny reads dask's setting at that time.) dask
+    sets a preload list of its own when it first makes the context; the server reads the
+    list once, when it starts, and this starts it first.
+    """
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return {}
+    from multiprocessing import forkserver
+
+    multiprocessing.get_context("forkserver").set_forkserver_preload(WORKER_PRELOAD)
+    # returns at once: the server imports while this process imports dask and starts the scheduler
+    forkserver.ensure_running()
+    return {"distributed.worker.multiprocessing-method": "forkserver"}
+
+
 def _local_cluster(n, memory_limit, silence):
     """A LocalCluster of ``n`` single-threaded worker processes, with :data:`WORKER_CONFIG`
-    (a nanny hands its configuration to the worker it starts or restarts)."""
+    (a nanny hands its configuration to the worker it starts or restarts), forked from a
+    server that has imported :data:`WORKER_PRELOAD` (:func:`_fork_server`)."""
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(WORKER_CONFIG):
+    with dask.config.set(dict(WORKER_CONFIG, **_fork_server())):
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             memory_limit=memory_limit, dashboard_address=None, silence_logs=silence)
 
@@ -848,6 +877,8 @@ def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, re
         summary.seconds = time.perf_counter() - t_start
         return summary
 
+    if scheduler is None:
+        _fork_server()       # its imports overlap the client's import of dask and the scheduler's start
     require("distributed", "cluster", "spectral_igl.collection")
     client, cluster, owned = _connect(scheduler, workers, memory_limit, silence)
     bar = _Progress(len(pending), progress)
