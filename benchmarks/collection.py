@@ -1,24 +1,38 @@
 """Shapes per minute: ``collection.run`` on 1 and 2 local workers against a plain Python loop.
 
 The job is the heat kernel signature at t = 1e-3 and 1e-2 times each shape's area (a user
-function, so that every shape gets the same relative scales), on the shared meshes. The
-plain loop reads, builds the Laplacian and computes, and keeps nothing; ``run`` also hashes
-the inputs, estimates memory, schedules, and writes one Zarr group per shape.
+function, so that every shape gets the same relative scales), on the shared meshes.
+
+What each row includes (the imports of a fresh process are left out of every row, and
+printed apart):
+
+- "plain loop": in this process, after its imports: read, build the Laplacian, compute,
+  keep nothing. Its first shape pays the first calls (libigl, the compiled LDLᵀ extension).
+- "plain loop as a script": the same loop in a fresh process (the honest twin of a run,
+  which is also a fresh process).
+- "run, w workers": ``collection.run`` in a fresh process, as a user's script calls it:
+  the cluster's start (workers forked from a server that imports the package), dispatch,
+  hashing the inputs, computing, writing one Zarr group per shape (synced), the stop.
 
 The machine may be shared, so every row also gives CPU time: the loop's, the sum inside the
-tasks (``time.process_time`` of the worker around each shape) and the client's (which, on a
-local cluster, also runs the scheduler). "in-task / loop" compares the CPU of the same work
-in a worker and in the loop; "predicted on a quiet machine" is the wall time the CPU
-accounting implies on ``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all
-CPU spent divided by the cores, whichever is larger, plus the cluster's start and stop.
+tasks (``time.process_time`` of the worker around each shape; the task thread's own
+``thread_time`` is printed below the table) and the client's (which, on a local cluster,
+also runs the scheduler). "in-task / loop" compares the CPU of the same work in a worker and
+in the loop; "predicted on a quiet machine" is the wall time the CPU accounting implies on
+``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all CPU spent divided by the
+cores, whichever is larger; "with start and stop" adds the run's own wall before its first
+task and after its last (read from the tasks' start times: these are wall times, inflated
+by a busy machine). The timeline lines say where each run's wall went, per worker.
 
 The row "2 plain loops in parallel" is the machine's ceiling for that split: the shapes
 each worker of the 2-worker run computed, each set in a plain loop in its own fresh
 process, both at once; their CPU is compared with each set's run alone in a fresh process
-just before (two busy processes share the caches, memory bandwidth and clock).
+just before (two busy processes share the caches, memory bandwidth and clock). The
+"ceiling" line bounds the speed-up from the largest shape's share and the start and stop.
 
 The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
-many small shapes: (wall − cluster start − time inside the tasks / workers) / shapes.
+many small shapes: (wall − before the first task − after the last − time inside the tasks
+/ workers) / shapes.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --small 100           # the table
     OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --count 1000 --only-count   # 1,000 shapes
