@@ -357,36 +357,48 @@ def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
     assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
 
 
+def _monitor_periods(dask_worker=None):
+    """(sampling profiler on, tick and memory monitor periods in ms) of a worker, or as
+    WORKER_CONFIG asks for them when called without one."""
+    if dask_worker is None:
+        from dask.utils import parse_timedelta
+
+        from spectral_igl.collection.engine import WORKER_CONFIG
+
+        return (False, 1000 * parse_timedelta(WORKER_CONFIG["distributed.admin.tick.interval"]),
+                1000 * parse_timedelta(WORKER_CONFIG["distributed.worker.memory.monitor-interval"]))
+    pc = dask_worker.periodic_callbacks
+    return ("profile" in pc, pc["tick"].callback_time, pc["memory_monitor"].callback_time)
+
+
 def _worker_state(name, lap):
-    """Tasks the worker running this shape holds unfinished, whether it samples stacks, and
-    the periods (ms) of its tick and memory monitors."""
+    """Tasks the worker running this shape holds unfinished, whether it was forked from the
+    server that preloads the package, whether it samples stacks, and the periods (ms) of its
+    tick and memory monitors."""
     from distributed import get_worker
 
     w = get_worker()
     held = sum(ts.state in ("waiting", "ready", "constrained", "executing") for ts in w.state.tasks.values())
-    pc = w.periodic_callbacks
-    return np.array([held, "profile" in pc, pc["tick"].callback_time, pc["memory_monitor"].callback_time],
-                    dtype=float)
+    forked = "spectral_igl.collection.preload" in sys.modules      # imported by the server only
+    return np.array([held, forked, *_monitor_periods(w)], dtype=float)
 
 
 def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
     """A worker gets its next task only when it has finished one (a task queued on a busy
-    worker cannot move to an idle one), and a local cluster's workers run no sampling profiler
-    and wake their event loop's monitors as WORKER_CONFIG says."""
-    from dask.utils import parse_timedelta
-
-    from spectral_igl.collection.engine import WORKER_CONFIG
+    worker cannot move to an idle one); a local cluster's workers are forked from a server
+    that has imported the package, run no sampling profiler and wake their event loop's
+    monitors as WORKER_CONFIG says."""
+    import multiprocessing
 
     V, F = icosphere(0)
     shapes = {f"s{i:02d}": (V * (1 + 0.01 * i), F) for i in range(12)}     # 4 batches of 3
     s = collection.run(shapes, Job.function(_worker_state), tmp_path / "w.zarr", workers=1, progress=False)
     assert s.ok and sorted(s.done) == sorted(shapes)
     states = np.array([r["result"] for r in collection.load(tmp_path / "w.zarr").results.values()])
-    assert states.shape == (12, 4)
+    assert states.shape == (12, 5)
     assert np.all(states[:, 0] == 1), states[:, 0]
-    assert not np.any(states[:, 1])
-    for col, key in ((2, "distributed.admin.tick.interval"), (3, "distributed.worker.memory.monitor-interval")):
-        assert np.all(states[:, col] == 1000 * parse_timedelta(WORKER_CONFIG[key])), (key, states[:, col])
+    assert np.all(states[:, 1] == ("forkserver" in multiprocessing.get_all_start_methods())), states[:, 1]
+    assert np.all(states[:, 2:] == _monitor_periods()), states[:, 2:]
 
 
 def _hks_slowly(name, lap):
@@ -420,6 +432,9 @@ def test_scheduler_and_workers_on_loopback(tmp_path):
         run.join(timeout=60)
         assert not run.is_alive()
         workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
+        periods = client.run(_monitor_periods)
+    # the worker programs get a local cluster's settings (no profiler, slow monitors)
+    assert len(periods) >= 2 and set(periods.values()) == {_monitor_periods()}, periods
     s = result["s"]
     assert sorted(s.done) == sorted(shapes) and s.ok, str(s)
     assert len(workers_seen) >= 2
