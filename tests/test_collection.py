@@ -401,6 +401,45 @@ def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
     assert np.all(states[:, 2:] == _monitor_periods()), states[:, 2:]
 
 
+_THREADS = """
+import os, sys
+import numpy as np
+from spectral_igl import collection
+from spectral_igl.collection import Job
+from spectral_igl.data_generators import icosphere
+
+KEYS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+def thread_settings(name, lap):
+    from threadpoolctl import threadpool_info
+
+    return np.array([os.environ.get(k) == "1" for k in KEYS]
+                    + [max((i["num_threads"] for i in threadpool_info()), default=1) == 1])
+
+
+if __name__ == "__main__":
+    s = collection.run({"ball": icosphere(1)}, Job.function(thread_settings), sys.argv[1], workers=1,
+                       progress=False)
+    print(s.ok, collection.load(sys.argv[1]).results["ball"]["result"].tolist())
+"""
+
+
+def test_forked_workers_get_one_thread_per_library(tmp_path):
+    """Workers forked from the server start with the thread counts a spawned worker gets,
+    whatever the client's environment: the BLAS libraries read them when they load, in the
+    server (without them a forked worker's OpenBLAS ran on every core inside its tasks)."""
+    script = tmp_path / "threads.py"
+    script.write_text(_THREADS)
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                                                            "OPENBLAS_NUM_THREADS")}
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1]) + os.pathsep + env.get("PYTHONPATH", "")
+    out = subprocess.run([sys.executable, str(script), str(tmp_path / "t.zarr")], env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "True [True, True, True, True]", out.stdout
+
+
 def _hks_slowly(name, lap):
     """HKS at two times, a little slower than it needs to be, so that a run lasts a few seconds."""
     time.sleep(0.15)

@@ -525,6 +525,10 @@ WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
 
 #: modules the fork server of a local cluster's workers imports (once, for every worker)
 WORKER_PRELOAD = ["distributed", "spectral_igl.collection.preload"]
+#: environment the fork server starts with: the thread counts dask's nanny gives a worker it
+#: spawns (``distributed.nanny.pre-spawn-environ``), which libraries read when they load
+#: (without them, forked workers ran an HKS with 17x the CPU: the BLAS and OpenMP threads)
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
 def _fork_server() -> dict:
@@ -546,8 +550,17 @@ def _fork_server() -> dict:
     from multiprocessing import forkserver
 
     multiprocessing.get_context("forkserver").set_forkserver_preload(WORKER_PRELOAD)
-    # returns at once: the server imports while this process imports dask and starts the scheduler
-    forkserver.ensure_running()
+    saved = {k: os.environ.get(k) for k in WORKER_ENV}
+    os.environ.update(WORKER_ENV)       # inherited by the server when it starts, then restored
+    try:
+        # returns at once: the server imports while this process imports dask and starts the scheduler
+        forkserver.ensure_running()
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
     return {"distributed.worker.multiprocessing-method": "forkserver"}
 
 
