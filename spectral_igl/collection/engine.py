@@ -527,7 +527,7 @@ WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
 WORKER_PRELOAD = ["distributed", "spectral_igl.collection.preload"]
 #: environment the fork server starts with: the thread counts dask's nanny gives a worker it
 #: spawns (``distributed.nanny.pre-spawn-environ``), which libraries read when they load
-#: (without them, forked workers ran an HKS with 17x the CPU: the BLAS and OpenMP threads)
+#: (without them, forked workers ran an HKS with 18x the CPU: OpenBLAS on every core)
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 

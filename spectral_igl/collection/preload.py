@@ -28,8 +28,9 @@ def warm() -> bool:
     True
     """
     try:
-        from .. import hks, laplacian
         from ..data_generators import icosphere
+        from ..descriptors import hks
+        from ..laplacian import laplacian
         from ..linalg.threads import blas_threads
 
         with blas_threads(1):
