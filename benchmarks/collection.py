@@ -1,24 +1,38 @@
 """Shapes per minute: ``collection.run`` on 1 and 2 local workers against a plain Python loop.
 
 The job is the heat kernel signature at t = 1e-3 and 1e-2 times each shape's area (a user
-function, so that every shape gets the same relative scales), on the shared meshes. The
-plain loop reads, builds the Laplacian and computes, and keeps nothing; ``run`` also hashes
-the inputs, estimates memory, schedules, and writes one Zarr group per shape.
+function, so that every shape gets the same relative scales), on the shared meshes.
+
+What each row includes (the imports of a fresh process are left out of every row, and
+printed apart):
+
+- "plain loop": in this process, after its imports: read, build the Laplacian, compute,
+  keep nothing. Its first shape pays the first calls (libigl, the compiled LDLᵀ extension).
+- "plain loop as a script": the same loop in a fresh process (the honest twin of a run,
+  which is also a fresh process).
+- "run, w workers": ``collection.run`` in a fresh process, as a user's script calls it:
+  the cluster's start (workers forked from a server that imports the package), dispatch,
+  hashing the inputs, computing, writing one Zarr group per shape (synced), the stop.
 
 The machine may be shared, so every row also gives CPU time: the loop's, the sum inside the
-tasks (``time.process_time`` of the worker around each shape) and the client's (which, on a
-local cluster, also runs the scheduler). "in-task / loop" compares the CPU of the same work
-in a worker and in the loop; "predicted on a quiet machine" is the wall time the CPU
-accounting implies on ``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all
-CPU spent divided by the cores, whichever is larger, plus the cluster's start and stop.
+tasks (``time.process_time`` of the worker around each shape; the task thread's own
+``thread_time`` is printed below the table) and the client's (which, on a local cluster,
+also runs the scheduler). "in-task / loop" compares the CPU of the same work in a worker and
+in the loop; "predicted on a quiet machine" is the wall time the CPU accounting implies on
+``os.cpu_count()`` idle cores: the busiest worker's task CPU, or all CPU spent divided by the
+cores, whichever is larger; "with start and stop" adds the run's own wall before its first
+task and after its last (read from the tasks' start times: these are wall times, inflated
+by a busy machine). The timeline lines say where each run's wall went, per worker.
 
 The row "2 plain loops in parallel" is the machine's ceiling for that split: the shapes
 each worker of the 2-worker run computed, each set in a plain loop in its own fresh
 process, both at once; their CPU is compared with each set's run alone in a fresh process
-just before (two busy processes share the caches, memory bandwidth and clock).
+just before (two busy processes share the caches, memory bandwidth and clock). The
+"ceiling" line bounds the speed-up from the largest shape's share and the start and stop.
 
 The scheduling overhead per shape is measured with a trivial job (the number of vertices) on
-many small shapes: (wall − cluster start − time inside the tasks / workers) / shapes.
+many small shapes: (wall − before the first task − after the last − time inside the tasks
+/ workers) / shapes.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --small 100           # the table
     OPENBLAS_NUM_THREADS=1 python benchmarks/collection.py --count 1000 --only-count   # 1,000 shapes
@@ -28,7 +42,6 @@ many small shapes: (wall − cluster start − time inside the tasks / workers) 
 from __future__ import annotations
 
 import argparse
-import logging
 import os
 import resource
 import shutil
@@ -124,88 +137,149 @@ def parallel_loops(halves):
     return wall, results
 
 
-def cluster_start(workers):
-    from distributed import Client, LocalCluster
+# ``collection.run`` as a script: a fresh process imports, runs once, prints JSON
+_RUN_ONE = """
+import json, resource, sys, time
+t0 = time.perf_counter()
+sys.path.insert(0, sys.argv[1])
+from collection import hks_relative, n_vertices, small_shapes
+from spectral_igl import collection
+from spectral_igl.collection import Job
+if __name__ == "__main__":
+    spec = json.loads(sys.stdin.readline())
+    inputs = small_shapes(spec["small"]) if spec["small"] else spec["paths"]
+    job = Job.function(hks_relative if spec["job"] == "hks" else n_vertices)
+    imports = time.perf_counter() - t0
+    r0 = resource.getrusage(resource.RUSAGE_SELF)
+    e0, t = time.time(), time.perf_counter()
+    s = collection.run(inputs, job, spec["out"], workers=spec["workers"], progress=False)
+    wall, e1 = time.perf_counter() - t, time.time()
+    r1 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu = r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime
+    print(json.dumps(dict(ok=s.ok, wall=wall, epoch=[e0, e1], client_cpu=cpu, client_imports=imports)))
+"""
 
-    t = time.perf_counter()
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
-    client = Client(cluster)
-    up = time.perf_counter() - t
-    client.close()
-    cluster.close()
-    return up, time.perf_counter() - t
+
+def small_shapes(count):
+    """``count`` copies of a 42-vertex sphere, each scaled a little (distinct inputs)."""
+    from data_generators import icosphere
+
+    V, F = icosphere(1)
+    return [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(count)]
+
+
+def run_as_script(out, workers, job="hks", paths=(), small=0):
+    """``collection.run`` in a fresh process, as a user's script runs it (the client's
+    imports apart): wall, epoch of start and end, the client's CPU during the run (it also
+    runs the scheduler and starts the cluster)."""
+    import json
+
+    spec = dict(out=str(out), workers=workers, job=job, paths=list(paths), small=small)
+    proc = subprocess.run([sys.executable, "-c", _RUN_ONE, str(Path(__file__).parent)], input=json.dumps(spec),
+                          capture_output=True, text=True, check=True)
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert res["ok"], proc.stderr[-2000:]
+    return res
 
 
 def task_times(out):
-    """Per-shape timings of a store: sums of wall and CPU inside the tasks, CPU per worker,
-    and the shapes each worker computed."""
+    """Per-shape timings of a store: sums of wall and CPU inside the tasks (the task's
+    process and its own thread), CPU per worker, the shapes each worker computed, and each
+    worker's first task start, last task end and busy wall (seconds since the epoch)."""
     from spectral_igl import collection
 
     res = collection.load(out, arrays=False).results
-    inside = sum(r.meta["timings"]["total"] for r in res.values())
-    cpu = sum(r.meta["timings"]["cpu"] for r in res.values())
-    job_cpu = sum(r.meta["timings"].get("compute_cpu", 0.0) for r in res.values())
-    compute = sum(r.meta["timings"].get("compute", 0.0) for r in res.values())
-    per_worker, split = {}, {}
+    sums = {k: sum(r.meta["timings"].get(k, 0.0) for r in res.values())
+            for k in ("total", "cpu", "thread_cpu", "compute_cpu", "compute_thread_cpu", "compute")}
+    per_worker, split, span = {}, {}, {}
     for name, r in res.items():
-        key = (r.meta["host"], r.meta["pid"])
-        per_worker[key] = per_worker.get(key, 0.0) + r.meta["timings"]["cpu"]
+        key, t = (r.meta["host"], r.meta["pid"]), r.meta["timings"]
+        per_worker[key] = per_worker.get(key, 0.0) + t["cpu"]
         split.setdefault(key, []).append(name)
-    return dict(inside=inside, cpu=cpu, job_cpu=job_cpu, compute=compute, per_worker=per_worker,
-                split=list(split.values()), n=len(res))
+        first, last, busy = span.get(key, (np.inf, -np.inf, 0.0))
+        span[key] = (min(first, t["started"]), max(last, t["started"] + t["total"]), busy + t["total"])
+    return dict(inside=sums["total"], cpu=sums["cpu"], thread_cpu=sums["thread_cpu"],
+                job_cpu=sums["compute_cpu"], job_thread_cpu=sums["compute_thread_cpu"],
+                compute=sums["compute"], per_worker=per_worker, split=list(split.values()),
+                span=list(span.values()), n=len(res))
 
 
-def timed_run(inputs, job, out, workers, **kw):
+def timed_run(out, workers, job="hks", paths=(), small=0):
+    """A run as a script (:func:`run_as_script`), its store's task timings, and a rerun in
+    this process that skips everything."""
     from spectral_igl import collection
+    from spectral_igl.collection import Job
 
     shutil.rmtree(out, ignore_errors=True)
-    c0 = client_cpu()
-    t = time.perf_counter()
-    s = collection.run(inputs, job, out, workers=workers, progress=False, **kw)
-    wall = time.perf_counter() - t
-    ccpu = client_cpu() - c0
-    assert s.ok, str(s)
+    r = run_as_script(out, workers, job, paths, small)
     tt = task_times(out)
+    inputs = small_shapes(small) if small else list(paths)
     t = time.perf_counter()
-    s2 = collection.run(inputs, job, out, workers=workers, progress=False)
+    s2 = collection.run(inputs, Job.function(hks_relative if job == "hks" else n_vertices), out,
+                        workers=workers, progress=False)
     rerun = time.perf_counter() - t
     assert len(s2.skipped) == tt["n"]
-    return dict(wall=wall, client_cpu=ccpu, rerun=rerun, **tt)
+    e0, e1 = r["epoch"]
+    end = max(last for _, last, _ in tt["span"])
+    start = min(first for first, _, _ in tt["span"]) - e0
+    return dict(r, rerun=rerun, start=start, stop=e1 - end, **tt)
+
+
+def timeline(r) -> str:
+    """Where a run's wall went: until each worker's first task (cluster start, the worker's
+    imports, dispatch), inside tasks, between tasks, idle at the end, after the last task."""
+    e0, e1 = r["epoch"]
+    span = sorted(r["span"])
+    end = max(last for _, last, _ in span)
+    firsts = " / ".join(f"{first - e0:.2f}" for first, _, _ in span)
+    busy = " / ".join(f"{b:.2f}" for _, _, b in span)
+    gaps = " / ".join(f"{last - first - b:.2f}" for first, last, b in span)
+    idle = " / ".join(f"{end - last:.2f}" for _, last, _ in span)
+    return (f"first task at {firsts} s (cluster start, a worker's imports, dispatch), inside tasks {busy} s, "
+            f"between tasks {gaps} s, idle at the end {idle} s (per worker); after the last task "
+            f"{e1 - end:.2f} s (stop); wall {e1 - e0:.2f} s")
 
 
 def speed_table(paths, tmp):
-    from spectral_igl.collection import Job
-
     cores = os.cpu_count() or 1
-    job = Job.function(hks_relative)
     print(f"load average before: {load_avg()}")
     lw, lc, ljob, per_shape = plain_loop(paths, hks_relative)
+    fresh = parallel_loops([paths])[1][0]        # the same loop as a script: a fresh process
     n = len(paths)
     print("\n| | wall (s) | shapes per minute | CPU (s): tasks / busiest worker / client | job CPU in-task / loop "
-          f"| predicted on {cores} quiet cores, without / with the cluster start (s) | predicted speed-up "
-          "over the loop, without / with | rerun, all skipped (s) |")
+          f"| predicted on {cores} quiet cores, without / with start and stop (s) "
+          "| predicted speed-up over the loop, without / with | rerun, all skipped (s) |")
     print("|---|---|---|---|---|---|---|---|")
     print(f"| plain loop | {lw:.1f} | {60 * n / lw:.0f} | {lc:.1f} | 1 | {lc:.1f} | 1 | |")
+    print(f"| plain loop as a script | {fresh['wall']:.1f} | {60 * n / fresh['wall']:.0f} | {fresh['cpu']:.1f} | "
+          f"{fresh['job_cpu'] / ljob:.2f} | {fresh['cpu']:.1f} | {lc / fresh['cpu']:.2f} | |")
+    lines = []
     for w in (1, 2):
-        up, updown = cluster_start(w)
-        r = timed_run(paths, job, tmp / f"w{w}.zarr", w)
+        r = timed_run(tmp / f"w{w}.zarr", w, paths=paths)
         busiest = max(r["per_worker"].values())
         # the client's CPU includes the cluster's start and stop (and, locally, the scheduler)
         pred = max(busiest, (r["cpu"] + r["client_cpu"]) / cores)
+        full = pred + r["start"] + r["stop"]
         print(f"| run, {w} worker{'s' if w > 1 else ''} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
               f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
-              f"{pred:.1f} / {pred + updown:.1f} | {lc / pred:.2f} / {lc / (pred + updown):.2f} | "
-              f"{r['rerun']:.2f} |")
-    ceiling(paths, r["split"], per_shape, lc, cores)
-    print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; cluster start + stop measured apart; "
-          f"load average after: {load_avg()}")
+              f"{pred:.1f} / {full:.1f} | {lc / pred:.2f} / {lc / full:.2f} | {r['rerun']:.2f} |")
+        lines.append(f"{w} worker(s): {timeline(r)}")
+        lines.append(f"{w} worker(s): job CPU {r['job_cpu']:.2f} s in the tasks' processes, "
+                     f"{r['job_thread_cpu']:.2f} s in the task threads (the loop: {ljob:.2f} s); all tasks "
+                     f"{r['cpu']:.2f} s, {r['thread_cpu']:.2f} s in the task threads")
+    print(f"\nimports before the first shape, a fresh process: the loop's {fresh['import_cpu']:.2f} s CPU, "
+          f"the run's client {r['client_imports']:.2f} s wall (both left out of the rows)")
+    for line in lines:
+        print(line)
+    ceiling(paths, r["split"], per_shape, lc, cores, r["start"] + r["stop"])
+    print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; load average after: {load_avg()}")
 
 
-def ceiling(paths, split, per_shape, loop_cpu, cores):
+def ceiling(paths, split, per_shape, loop_cpu, cores, startstop):
     """The row "two plain loops in parallel": the shapes of each worker of the last run, each
     in a plain loop in its own process, both at once, against each set alone in a fresh
-    process just before (the same conditions); and the largest shape's share."""
+    process just before (the same conditions); and the bound the largest shape, the
+    cluster's start and stop and the workers' imports set."""
     by_name = {Path(p).stem: p for p in paths}
     halves = [[by_name[k] for k in names] for names in split]
     alone = [parallel_loops([half])[1][0] for half in halves]
@@ -214,36 +288,32 @@ def ceiling(paths, split, per_shape, loop_cpu, cores):
     solo_job = sum(r["job_cpu"] for r in alone)
     busiest = max(r["cpu"] for r in res)
     cpu = sum(r["cpu"] for r in res)
-    print(f"| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
+    print(f"\n| {len(res)} plain loops in parallel (each on one worker's shapes) | {wall:.1f} | "
           f"{60 * len(paths) / wall:.0f} | {cpu:.1f} / {busiest:.1f} / | "
           f"{sum(r['job_cpu'] for r in res) / solo_job:.2f} | {busiest:.1f} / | "
           f"{loop_cpu / busiest:.2f} / | |")
     print("\nparallel loops: CPU of each half " + ", ".join(
         f"{r['cpu']:.2f} s against {s:.2f} s alone ({r['cpu'] / s:.2f}x)" for r, s in zip(res, solo))
         + "; a fresh process's imports before the first shape "
-        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; each worker pays them)")
+        f"{np.mean([r['import_cpu'] for r in res]):.2f} s CPU (the loop rows exclude them; a local run's workers are forked from a server that has imported them)")
     name, (big, _) = max(per_shape.items(), key=lambda kv: kv[1][0])
     bound = max(big, loop_cpu / cores)
-    print(f"largest shape: {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
+    full = bound + startstop
+    print(f"ceiling: largest shape {name}, {big:.2f} s of the loop's {loop_cpu:.1f} s CPU "
           f"({100 * big / loop_cpu:.0f} %): on {cores} workers at best {bound:.2f} s, a speed-up of at most "
-          f"{loop_cpu / bound:.2f}")
+          f"{loop_cpu / bound:.2f}; with the last run's wall before its first task and after its last "
+          f"({startstop:.2f} s: cluster start, a worker's imports, stop) at best {full:.2f} s, a speed-up of "
+          f"at most {loop_cpu / full:.2f}")
 
 
 def overhead(n_small, tmp):
-    from data_generators import icosphere
-
-    from spectral_igl.collection import Job
-
-    V, F = icosphere(1)
-    small = [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(n_small)]
     for w in (1, 2):
-        up, updown = cluster_start(w)
-        r = timed_run(small, Job.function(n_vertices), tmp / f"o{w}.zarr", w)
-        over = (r["wall"] - updown - r["compute"] / w) / len(small)
-        print(f"overhead, {len(small)} shapes of {len(V)} vertices, {w} worker(s): wall {r['wall']:.2f} s, "
-              f"cluster start + stop {updown:.2f} s, job inside the tasks {r['compute']:.3f} s, "
-              f"task CPU {1e3 * r['cpu'] / len(small):.1f} ms/shape, client CPU "
-              f"{1e3 * r['client_cpu'] / len(small):.1f} ms/shape (with the cluster's start): "
+        r = timed_run(tmp / f"o{w}.zarr", w, job="n", small=n_small)
+        over = (r["wall"] - r["start"] - r["stop"] - r["compute"] / w) / n_small
+        print(f"overhead, {n_small} shapes of 42 vertices, {w} worker(s): wall {r['wall']:.2f} s, of which "
+              f"{r['start']:.2f} s before the first task and {r['stop']:.2f} s after the last, job inside the "
+              f"tasks {r['compute']:.3f} s, task CPU {1e3 * r['cpu'] / n_small:.1f} ms/shape, client CPU "
+              f"{1e3 * r['client_cpu'] / n_small:.1f} ms/shape (with the cluster's start): "
               f"{1e3 * over:.1f} ms per shape; load {load_avg()}")
 
 
@@ -360,54 +430,29 @@ def thousand(count, meshes, tmp, keep=None):
 
 
 # ---- a scheduler and workers started as separate processes -------------------------------------
-def _spawn(args, env, log):
-    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
-                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
-
-
 def loopback(paths, tmp, workers=3):
     """``dask scheduler`` and ``workers`` ``dask worker`` processes on 127.0.0.1; one worker
     killed at a third of the shapes and one added; the results against a 1-worker run."""
-    from distributed import Client
-
     from spectral_igl import collection
     from spectral_igl.collection import Job
 
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parents[1]),
-                                                       os.environ.get("PYTHONPATH", "")]),
-               DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED="False")   # as a local cluster's workers
-    sched_file, log = tmp / "scheduler.json", open(tmp / "cluster.log", "w")
-    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                     "--scheduler-file", str(sched_file)], env, log)]
-    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1", "--no-dashboard",
-              "--host", "127.0.0.1", "--memory-limit", "4GB"]
     out, ref = tmp / "loopback.zarr", tmp / "single.zarr"
     job = Job.function(hks_relative)
-    try:
-        while not sched_file.is_file():
-            time.sleep(0.1)
-        procs += [_spawn(worker, env, log) for _ in range(workers)]
-        with Client(scheduler_file=str(sched_file), timeout=30) as client:
-            client.wait_for_workers(workers, timeout=60)
-            box = {}
-            t = time.perf_counter()
-            th = threading.Thread(target=lambda: box.update(s=collection.run(
-                paths, job, out, scheduler=client, progress=False)))
-            th.start()
-            while th.is_alive() and sum(1 for p in out.glob("*") if not p.name.startswith(".")
-                                        and (p / "zarr.json").is_file()) < len(paths) // 3:
-                time.sleep(0.05)
-            os.killpg(procs[1].pid, signal.SIGKILL)
-            killed_at = time.perf_counter() - t
-            procs.append(_spawn(worker, env, log))
-            th.join()
-            wall = time.perf_counter() - t
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-        log.close()
+    with collection.LoopbackCluster(workers, folder=tmp / "cluster", memory_limit="4GB", timeout=60) as cluster, \
+            cluster.client() as client:
+        box = {}
+        t = time.perf_counter()
+        th = threading.Thread(target=lambda: box.update(s=collection.run(
+            paths, job, out, scheduler=client, progress=False)))
+        th.start()
+        while th.is_alive() and sum(1 for p in out.glob("*") if not p.name.startswith(".")
+                                    and (p / "zarr.json").is_file()) < len(paths) // 3:
+            time.sleep(0.05)
+        cluster.kill_worker(0)
+        killed_at = time.perf_counter() - t
+        cluster.add_worker()
+        th.join()
+        wall = time.perf_counter() - t
     s = box["s"]
     collection.run(paths, job, ref, workers=1, progress=False)
     a, b = collection.load(out).results, collection.load(ref).results

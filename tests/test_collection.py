@@ -357,37 +357,93 @@ def test_shapes_above_the_worker_limit_run_alone(tmp_path, monkeypatch):
     assert _close(res["torus"]["hks"][:, 0], sig.hks(sig.laplacian(*shapes["torus"]), 0.1))
 
 
+def _monitor_periods(dask_worker=None):
+    """(sampling profiler on, tick and memory monitor periods in ms) of a worker, or as
+    WORKER_CONFIG asks for them when called without one."""
+    if dask_worker is None:
+        from dask.utils import parse_timedelta
+
+        from spectral_igl.collection.engine import WORKER_CONFIG
+
+        return (False, 1000 * parse_timedelta(WORKER_CONFIG["distributed.admin.tick.interval"]),
+                1000 * parse_timedelta(WORKER_CONFIG["distributed.worker.memory.monitor-interval"]))
+    pc = dask_worker.periodic_callbacks
+    return ("profile" in pc, pc["tick"].callback_time, pc["memory_monitor"].callback_time)
+
+
 def _worker_state(name, lap):
-    """Tasks the worker running this shape holds unfinished, and whether it samples stacks."""
+    """Tasks the worker running this shape holds unfinished, whether it was forked from the
+    server that preloads the package, whether it samples stacks, and the periods (ms) of its
+    tick and memory monitors."""
     from distributed import get_worker
 
     w = get_worker()
     held = sum(ts.state in ("waiting", "ready", "constrained", "executing") for ts in w.state.tasks.values())
-    return np.array([held, "profile" in w.periodic_callbacks], dtype=float)
+    forked = "spectral_igl.collection.preload" in sys.modules      # imported by the server only
+    return np.array([held, forked, *_monitor_periods(w)], dtype=float)
 
 
 def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
     """A worker gets its next task only when it has finished one (a task queued on a busy
-    worker cannot move to an idle one), and a local cluster's workers run no sampling profiler."""
+    worker cannot move to an idle one); a local cluster's workers are forked from a server
+    that has imported the package, run no sampling profiler and wake their event loop's
+    monitors as WORKER_CONFIG says."""
+    import multiprocessing
+
     V, F = icosphere(0)
     shapes = {f"s{i:02d}": (V * (1 + 0.01 * i), F) for i in range(12)}     # 4 batches of 3
     s = collection.run(shapes, Job.function(_worker_state), tmp_path / "w.zarr", workers=1, progress=False)
     assert s.ok and sorted(s.done) == sorted(shapes)
     states = np.array([r["result"] for r in collection.load(tmp_path / "w.zarr").results.values()])
-    assert states.shape == (12, 2)
+    assert states.shape == (12, 5)
     assert np.all(states[:, 0] == 1), states[:, 0]
-    assert not np.any(states[:, 1])
+    assert np.all(states[:, 1] == ("forkserver" in multiprocessing.get_all_start_methods())), states[:, 1]
+    assert np.all(states[:, 2:] == _monitor_periods()), states[:, 2:]
+
+
+_THREADS = """
+import os, sys
+import numpy as np
+from spectral_igl import collection
+from spectral_igl.collection import Job
+from spectral_igl.data_generators import icosphere
+
+KEYS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+def thread_settings(name, lap):
+    from threadpoolctl import threadpool_info
+
+    return np.array([os.environ.get(k) == "1" for k in KEYS]
+                    + [max((i["num_threads"] for i in threadpool_info()), default=1) == 1])
+
+
+if __name__ == "__main__":
+    s = collection.run({"ball": icosphere(1)}, Job.function(thread_settings), sys.argv[1], workers=1,
+                       progress=False)
+    print(s.ok, collection.load(sys.argv[1]).results["ball"]["result"].tolist())
+"""
+
+
+def test_forked_workers_get_one_thread_per_library(tmp_path):
+    """Workers forked from the server start with the thread counts a spawned worker gets,
+    whatever the client's environment: the BLAS libraries read them when they load, in the
+    server (without them a forked worker's OpenBLAS ran on every core inside its tasks)."""
+    script = tmp_path / "threads.py"
+    script.write_text(_THREADS)
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                                                            "OPENBLAS_NUM_THREADS")}
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1]) + os.pathsep + env.get("PYTHONPATH", "")
+    out = subprocess.run([sys.executable, str(script), str(tmp_path / "t.zarr")], env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "True [True, True, True, True]", out.stdout
 
 
 def _hks_slowly(name, lap):
     """HKS at two times, a little slower than it needs to be, so that a run lasts a few seconds."""
     time.sleep(0.15)
     return sig.hks(lap, [0.01, 0.1])
-
-
-def _spawn(args, env, log):
-    return subprocess.Popen([sys.executable, "-m", "distributed.cli." + args[0], *args[1:]], env=env,
-                            start_new_session=True, stdout=log, stderr=subprocess.STDOUT)
 
 
 def test_scheduler_and_workers_on_loopback(tmp_path):
@@ -397,45 +453,27 @@ def test_scheduler_and_workers_on_loopback(tmp_path):
 
     from spectral_igl.linalg.threads import blas_threads
 
-    root = Path(__file__).resolve().parents[1]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"),
-                                                       os.environ.get("PYTHONPATH", "")]),
-               OPENBLAS_NUM_THREADS="1")
-    sched_file = tmp_path / "scheduler.json"
-    log = open(tmp_path / "cluster.log", "w")
-    procs = [_spawn(["dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                     "--scheduler-file", str(sched_file)], env, log)]
-    worker = ["dask_worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
-              "--no-dashboard", "--host", "127.0.0.1", "--memory-limit", "2GB"]
     V, F = icosphere(3)
     shapes = {f"s{i:02d}": (V * (1.0 + 0.05 * i), F) for i in range(30)}
     out = tmp_path / "loop.zarr"
-    try:
-        deadline = time.time() + 20
-        while not sched_file.is_file() and time.time() < deadline:
-            time.sleep(0.1)
-        procs += [_spawn(worker, env, log), _spawn(worker, env, log)]
-        from distributed import Client
-
-        with Client(scheduler_file=str(sched_file), timeout=20) as client:
-            client.wait_for_workers(2, timeout=30)
-            result = {}
-            run = threading.Thread(target=lambda: result.update(s=collection.run(
-                shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
-            run.start()
-            while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
-                time.sleep(0.02)
-            os.killpg(procs[1].pid, signal.SIGKILL)          # a worker dies mid-run
-            procs.append(_spawn(worker, env, log))           # and another one joins
-            run.join(timeout=60)
-            assert not run.is_alive()
-            workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
-        log.close()
+    # the scheduler unpickles the task graph: it imports what this module's functions refer to
+    tests = Path(__file__).resolve().parent
+    with collection.LoopbackCluster(workers=2, folder=tmp_path, extra_paths=[tests], timeout=30) as cluster, \
+            cluster.client() as client:
+        result = {}
+        run = threading.Thread(target=lambda: result.update(s=collection.run(
+            shapes, Job.function(_hks_slowly), out, scheduler=client, progress=False)))
+        run.start()
+        while run.is_alive() and sum(1 for p in out.glob("s*") if (p / "zarr.json").is_file()) < 6:
+            time.sleep(0.02)
+        cluster.kill_worker(0)             # a worker dies mid-run
+        cluster.add_worker()               # and another one joins
+        run.join(timeout=60)
+        assert not run.is_alive()
+        workers_seen = {r.meta["pid"] for r in collection.load(out, arrays=False).results.values()}
+        periods = client.run(_monitor_periods)
+    # the worker programs get a local cluster's settings (no profiler, slow monitors)
+    assert len(periods) >= 2 and set(periods.values()) == {_monitor_periods()}, periods
     s = result["s"]
     assert sorted(s.done) == sorted(shapes) and s.ok, str(s)
     assert len(workers_seen) >= 2
@@ -444,6 +482,18 @@ def test_scheduler_and_workers_on_loopback(tmp_path):
         with blas_threads(1):
             expect = sig.hks(sig.laplacian(Vi, Fi), [0.01, 0.1])
         assert np.array_equal(res[name]["result"], expect), name
+
+
+def test_loopback_cluster_arguments_and_clean_up(tmp_path):
+    """Bad arguments are refused by name, and leaving the context kills every process."""
+    with pytest.raises(ValueError, match="workers"):
+        collection.LoopbackCluster(workers=-1)
+    with collection.LoopbackCluster(workers=0, folder=tmp_path) as cluster:
+        assert cluster.scheduler_file.is_file()
+        with pytest.raises(ValueError, match="index"):
+            cluster.kill_worker(0)
+    assert all(p.poll() is not None for p in cluster.processes)
+    assert tmp_path.is_dir()             # a folder given is kept (its log is there)
 
 
 def test_store_writes_arrays_zarr_reads(tmp_path):

@@ -11,7 +11,9 @@ dask and zarr are imported only when a collection is run or loaded.
 """
 from .engine import RunSummary, Shape, collect_inputs, estimate_memory, inspect_shape, process_shape, run
 from .jobs import Job
+from .loopback import LoopbackCluster
 from .store import Loaded, ShapeResult, StoreInUse, load
 
 __all__ = ["run", "load", "Job", "RunSummary", "Loaded", "ShapeResult", "Shape",
-           "collect_inputs", "estimate_memory", "inspect_shape", "process_shape", "StoreInUse"]
+           "collect_inputs", "estimate_memory", "inspect_shape", "process_shape", "StoreInUse",
+           "LoopbackCluster"]

@@ -388,8 +388,8 @@ def _tune_malloc() -> None:
 def _compute(shape: Shape, job: Job, meta: dict, limit):
     """``(record, arrays)`` of one shape; record status ``"too_large"`` when its memory
     estimate exceeds ``limit`` (nothing computed)."""
-    t0, c0 = time.perf_counter(), time.process_time()
-    timings = {}
+    t0, c0, h0 = time.perf_counter(), time.process_time(), time.thread_time()
+    timings = {"started": time.time()}      # seconds since the epoch: a run's timeline across workers
     record = dict(meta, name=shape.name, source=shape.source, version=__version__,
                   host=socket.gethostname(), pid=os.getpid())
     lap, arrays = None, {}
@@ -416,10 +416,11 @@ def _compute(shape: Shape, job: Job, meta: dict, limit):
         record.update(n=lap.n, nnz=int(lap.L.nnz), domain=lap.domain,
                       n_components=int(lap.n_components),
                       memory_estimate_bytes=estimate_memory(lap.n, int(lap.L.nnz), domain, job))
-        t, c = time.perf_counter(), time.process_time()
+        t, c, h = time.perf_counter(), time.process_time(), time.thread_time()
         arrays, bounds = job(shape.name, lap)
         timings["compute"] = time.perf_counter() - t
         timings["compute_cpu"] = time.process_time() - c
+        timings["compute_thread_cpu"] = time.thread_time() - h
         record.update(status="done", bounds=bounds)
     except Exception as err:  # noqa: BLE001 - the shape's failure is recorded, others go on
         arrays = {}
@@ -431,6 +432,7 @@ def _compute(shape: Shape, job: Job, meta: dict, limit):
         del lap
     timings["total"] = time.perf_counter() - t0
     timings["cpu"] = time.process_time() - c0
+    timings["thread_cpu"] = time.thread_time() - h0     # the task's own thread, without the event loop
     record["timings"] = timings
     record["worker_peak_rss_bytes"] = _peak_rss()
     record["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
@@ -506,18 +508,70 @@ def _as_job(job) -> Job:
                     f"fn(name, lap), got {describe(job)}")
 
 
-#: dask settings of the workers of a local cluster: no sampling profiler (it interrupts the
-#: task thread every 10 ms; about 10 % of the CPU of an HKS task, measured)
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+#: dask settings of the workers of a local cluster (and of :class:`LoopbackCluster`'s
+#: programs). No sampling profiler: it interrupts the task thread every 10 ms (about 10 % of
+#: the CPU of an HKS task, measured). The event loop's periodic checks wake less often: the
+#: tick monitor (20 ms by default), the system monitor (500 ms) and the memory monitor
+#: (100 ms) each take the GIL from the task thread; with dask's intervals the other threads
+#: of a worker spent 3-5 % of the task thread's CPU during the jobs, and the task thread
+#: itself 1-4 % more, measured (with these: under 1 % and the loop's CPU). The memory
+#: monitor then checks the worker's limit every 0.5 s (each task also checks its shape's
+#: estimate against it before computing).
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                 "distributed.admin.tick.interval": "1s",
+                 "distributed.admin.system-monitor.interval": "5s",
+                 "distributed.worker.memory.monitor-interval": "500ms"}
+
+
+#: modules the fork server of a local cluster's workers imports (once, for every worker)
+WORKER_PRELOAD = ["distributed", "spectral_igl.collection.preload"]
+#: environment the fork server starts with: the thread counts dask's nanny gives a worker it
+#: spawns (``distributed.nanny.pre-spawn-environ``), which libraries read when they load
+#: (without them, forked workers ran an HKS with 18x the CPU: OpenBLAS on every core)
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def _fork_server() -> dict:
+    """dask's setting that forks a local cluster's workers from a server that has imported
+    :data:`WORKER_PRELOAD`, where the platform has one (else none: dask spawns them).
+
+    A spawned worker imports distributed and this package itself, each worker again
+    (0.4–0.6 s of CPU measured), and pays the first call of the compiled extensions in its
+    first task; forked from the server, it starts with them. The server lives as long as
+    this process, so the workers of a later run fork from it too. (A worker that its nanny
+    restarts after it died is spawned: the nanny reads dask's setting at that time.) dask
+    sets a preload list of its own when it first makes the context; the server reads the
+    list once, when it starts, and this starts it first.
+    """
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return {}
+    from multiprocessing import forkserver
+
+    multiprocessing.get_context("forkserver").set_forkserver_preload(WORKER_PRELOAD)
+    saved = {k: os.environ.get(k) for k in WORKER_ENV}
+    os.environ.update(WORKER_ENV)       # inherited by the server when it starts, then restored
+    try:
+        # returns at once: the server imports while this process imports dask and starts the scheduler
+        forkserver.ensure_running()
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return {"distributed.worker.multiprocessing-method": "forkserver"}
 
 
 def _local_cluster(n, memory_limit, silence):
     """A LocalCluster of ``n`` single-threaded worker processes, with :data:`WORKER_CONFIG`
-    (a nanny hands its configuration to the worker it starts or restarts)."""
+    (a nanny hands its configuration to the worker it starts or restarts), forked from a
+    server that has imported :data:`WORKER_PRELOAD` (:func:`_fork_server`)."""
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(WORKER_CONFIG):
+    with dask.config.set(dict(WORKER_CONFIG, **_fork_server())):
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                             memory_limit=memory_limit, dashboard_address=None, silence_logs=silence)
 
@@ -836,6 +890,8 @@ def _run_locked(shapes, job, out, key, options, workers, scheduler, progress, re
         summary.seconds = time.perf_counter() - t_start
         return summary
 
+    if scheduler is None:
+        _fork_server()       # its imports overlap the client's import of dask and the scheduler's start
     require("distributed", "cluster", "spectral_igl.collection")
     client, cluster, owned = _connect(scheduler, workers, memory_limit, silence)
     bar = _Progress(len(pending), progress)
