@@ -88,3 +88,28 @@ def test_tufted_cover_refuses_bad_triangles():
         tufted_cover(P, np.array([[0, 1, 3]]))
     with pytest.raises(ValueError, match="T must be"):
         tufted_cover(P, np.array([0, 1, 2]))
+
+
+def test_max_tilt_leaves_out_the_triangles_standing_on_a_star():
+    i, j = np.meshgrid(np.arange(12.0), np.arange(12.0))
+    P = np.c_[(i + 0.5 * j).ravel(), (j * np.sqrt(3) / 2).ravel(), np.zeros(144)]
+    flat = local_triangles(P, k=20)
+    area = np.linalg.norm(np.cross(P[flat[:, 1]] - P[flat[:, 0]], P[flat[:, 2]] - P[flat[:, 0]]), axis=1)
+    # every triangle of a flat cloud lies in its stars' plane: none is left out but the
+    # collinear ones of the boundary stars, whose plane is undefined
+    kept = {tuple(t) for t in local_triangles(P, k=20, max_tilt=1.0)}
+    assert {tuple(t) for t in flat[area > 1e-9]} <= kept <= {tuple(t) for t in flat}
+    # lift one point two spacings: its triangles stand at atan(2 / (sqrt(3)/2)) = 66.6° or
+    # more on the planes of its neighbours' stars (and its neighbours' on its own)
+    spike = 6 * 12 + 5
+    P[spike, 2] = 2.0
+    T = local_triangles(P, k=20)
+    assert np.sum(np.any(T == spike, axis=1)) >= 6
+    for tilt, left in ((60.0, False), (70.0, True)):
+        Tk = local_triangles(P, k=20, max_tilt=tilt)
+        assert np.any(Tk == spike) == left
+    # the rest of the lattice keeps its triangles
+    Tk = local_triangles(P, k=20, max_tilt=60.0)
+    assert set(np.unique(Tk)) == set(range(144)) - {spike}
+    with pytest.raises(ValueError, match="max_tilt"):
+        local_triangles(P, max_tilt=120.0)

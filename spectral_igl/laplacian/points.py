@@ -524,7 +524,7 @@ def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     return make_laplacian(-W, sp.diags(mass).tocsr(), domain="points", data=data)
 
 
-def local_triangles(P, k: int = 20, boundary: bool = False) -> np.ndarray:
+def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | None = None) -> np.ndarray:
     r"""The triangles of every point's local Delaunay fan (the stars behind ``"delaunay"``).
 
     For each point :math:`p_i`, its Delaunay neighbours in the tangent plane of
@@ -541,6 +541,13 @@ def local_triangles(P, k: int = 20, boundary: bool = False) -> np.ndarray:
         Neighbours of each star.
     boundary : bool
         As in :func:`point_cloud_laplacian`.
+    max_tilt : float, optional
+        Leave out a star's triangles whose 3-D plane is tilted from the star's tangent
+        plane by more than this angle (degrees): the ratio of the projected to the 3-D
+        area is the cosine of the tilt. Where two sheets of a surface pass closer than
+        the sampling's spacing, the star of a point on one takes neighbours on the other,
+        and the triangles to them stand steeply on its plane; a triangle that one star
+        leaves out is still listed by the stars that hold it flat. Default: keep all.
 
     Returns
     -------
@@ -560,21 +567,32 @@ def local_triangles(P, k: int = 20, boundary: bool = False) -> np.ndarray:
     P = as_points(as_mesh_arrays(P, name="P", need_cells=False)[0], "P", dims=(3,), min_rows=4)
     if isinstance(k, bool) or not isinstance(k, (numbers.Integral, np.integer)) or k < 3:
         raise ValueError(f"k must be an integer number of neighbours >= 3, got {describe(k)}")
+    if max_tilt is not None:
+        max_tilt = as_positive(max_tilt, "max_tilt")
+        if max_tilt > 90:
+            raise ValueError(f"max_tilt must be an angle in (0, 90] degrees, got {max_tilt}")
     n = P.shape[0]
     k = min(int(k), n - 1)
     rows = np.arange(n)
     d, J = _knn(cKDTree(P), P, rows, k)
-    _, Q, _, dual, _ = _star_plane(P, rows, d, J, bool(boundary))
+    nb, Q, _, dual, _ = _star_plane(P, rows, d, J, bool(boundary))
     ang = np.where(dual > 0, np.arctan2(Q[..., 1], Q[..., 0]), np.inf)
     order = np.argsort(ang, axis=1)
     cnt = (dual > 0).sum(axis=1)
     Js = np.take_along_axis(J, order, axis=1)
     angs = np.take_along_axis(ang, order, axis=1)
+    Qs = np.take_along_axis(Q, order[..., None], axis=1)
+    nbs = np.take_along_axis(nb, order[..., None], axis=1)
     out = []
     for m in range(k):
         b = np.where(m + 1 < cnt, m + 1, 0)
         gap = np.where(b == 0, angs[rows, b] + 2.0 * np.pi - angs[:, m], angs[rows, b] - angs[:, m])
         ok = (m < cnt) & (cnt >= 2) & (gap > 0) & (gap < np.pi)
+        if max_tilt is not None:
+            qa, qb = Qs[:, m], Qs[rows, b]
+            flat = np.abs(qa[:, 0] * qb[:, 1] - qa[:, 1] * qb[:, 0])
+            full = np.linalg.norm(np.cross(nbs[:, m], nbs[rows, b]), axis=1)
+            ok &= flat >= np.cos(np.radians(max_tilt)) * full
         out.append(np.c_[rows[ok], Js[ok, m], Js[rows, b][ok]])
     return np.concatenate(out).astype(np.int64)
 
