@@ -39,6 +39,7 @@ from ..approx.rational import PartialFractions, cf_exp, certify, rounding
 from ..filters import Filter, heat
 from ..laplacian import as_laplacian, lambda_max
 from ..linalg import inverse_mass_diagonal, ldlt_factor
+from ..linalg.threads import serial_blas
 
 __all__ = ["HYPERBOLA", "heat_poles", "fit_family", "family_poles", "plan_poles", "pole_factorizations",
            "coefficients", "as_times", "SCALAR_FLOOR", "heat_targets", "heat_plan", "as_filters"]
@@ -155,6 +156,7 @@ def _lawson(A, y, iterations=6):
     return best
 
 
+@serial_blas
 def fit_family(filters, upper, real, a: float, b: float, sigma: float, scales=None, targets=None,
                stop: bool = False):
     """Per-member partial fractions with the poles fixed, and each member's certified error.
@@ -192,6 +194,7 @@ def fit_family(filters, upper, real, a: float, b: float, sigma: float, scales=No
     return out
 
 
+@serial_blas
 def family_poles(filters, a: float, b: float, rtol: float = 1e-12, max_poles: int = 80,
                  representatives: int = 12, scales=None):
     """Common poles of a family of real filters by set-valued AAA on [a, b].

@@ -280,6 +280,7 @@ def _multires(lap, fac, s, m, tol, backend, bar):
     return X[:, :m]
 
 
+@serial_blas
 def _rayleigh_ritz(lap, X):
     """Ritz values (ascending, clipped at 0) and B-orthonormal Ritz vectors of span(X)."""
     H, G = X.T @ (lap.L @ X), X.T @ (lap.B @ X)
