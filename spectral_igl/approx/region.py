@@ -467,10 +467,14 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
 def _sub_blocks(M, region_offsets, blocks):
     """(rows, the block-diagonal M restricted to those blocks, their offsets)."""
     sizes = np.diff(region_offsets)[blocks]
-    rows = np.concatenate([np.arange(region_offsets[b], region_offsets[b + 1]) for b in blocks]) \
-        if blocks.size else np.zeros(0, dtype=np.int64)
-    sub = sp.csr_matrix(M[rows][:, rows])
-    return rows, sub, np.r_[0, np.cumsum(sizes)]
+    offs = np.r_[0, np.cumsum(sizes)]
+    rows = np.repeat(region_offsets[blocks] - offs[:-1], sizes) + np.arange(offs[-1])
+    owner, cols, pos = _edges(M, rows)
+    # block diagonal: a row's columns lie in its block, moved as its rows are
+    shift = np.repeat(offs[:-1] - region_offsets[blocks], sizes)[owner]
+    indptr = np.r_[0, np.cumsum(np.bincount(owner, minlength=rows.size))]
+    sub = sp.csr_matrix((M.data[pos], cols + shift, indptr), shape=(rows.size, rows.size))
+    return rows, sub, offs
 
 
 def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
