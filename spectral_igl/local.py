@@ -271,7 +271,9 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     :func:`local_heat_kernel`, by blocks of ``block`` neighbouring sources that share one
     region; the Dirichlet operators of the regions of a few thousand sources are stacked into
     one block-diagonal operator, so that one series of sparse products solves them all
-    (:func:`~spectral_igl.approx.region.dirichlet_heat_blocks`). Every entry at or above
+    (:func:`~spectral_igl.approx.region.dirichlet_heat_blocks`; a region whose worst element
+    makes its rate large takes the Chebyshev series, proved in the B-norm, instead of
+    uniformization). Every entry at or above
     ``threshold`` times its column's peak is kept, and what is dropped is bounded, entry by
     entry and in mass. Column i of K is the diffusion basis function :math:`K_t e_i` of vertex
     i, its diagonal the heat kernel signature (:func:`sparse_diffusion_distance` reads the
@@ -320,8 +322,10 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     matrix C holds :math:`u_{ic}` (the region's Dirichlet kernel, see :func:`local_heat_kernel`)
     where :math:`u_{ic} \ge` ``threshold`` :math:`\max_i u_{ic}`, with
     :math:`|u_{ic} - (K_t)_{ic}| \le \beta_{ic} = e_{ic} + m_c/B_{ii}`, where the region
-    solver's bound is :math:`e_{ic} = \rho_c u_{ic} + a_c` (a relative rounding and an
-    additive truncation per column). Then :math:`K = \max(C, C^\top)` entrywise (a dropped
+    solver's bound is :math:`e_{ic} \le \rho_c u_{ic} + a_c` (a relative rounding and an
+    additive part per column: the series' truncation, or for a region evaluated by its
+    Chebyshev series, :math:`\varepsilon\|g\|_B/\sqrt{B_{ii}}` at its largest over the
+    region). Then :math:`K = \max(C, C^\top)` entrywise (a dropped
     entry counting 0): each stored entry is the larger of the computed values available for
     :math:`(K_t)_{ij} = (K_t)_{ji}`, and since each column's bound grows with the value, both
     columns' bounds evaluated at :math:`K_{ij}` bound it:

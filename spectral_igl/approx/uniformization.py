@@ -230,6 +230,25 @@ def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
     return (V[:, 0], err[:, 0]) if one else (V, err)
 
 
+def _leading(P, offsets, need):
+    """head(k) -> (rows, the leading rows x rows of P): the blocks still summing at term k, a
+    leading part of the block-diagonal P when the blocks come in decreasing order of their
+    terms ``need`` (its columns are those rows too); all of P otherwise."""
+    leading = bool(np.all(np.diff(need) <= 0))
+    n = P.shape[0]
+    heads = {}
+
+    def head(k):
+        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else n
+        if rows not in heads:
+            end = int(P.indptr[rows])
+            heads[rows] = (P if rows == n else
+                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
+        return rows, heads[rows]
+
+    return head
+
+
 def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = TAIL):
     r""":func:`uniformize` on a block-diagonal P whose blocks have their own rates, at once.
 
@@ -285,19 +304,8 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     r = max(int(np.max(np.diff(P.indptr), initial=0)), 1)
     lam = np.array(lams)
     single = alpha.size == 1
-    # blocks in decreasing order of terms: term k needs only the rows of the blocks still
-    # summing, a leading part of P (block diagonal: its columns are those rows too)
-    leading = bool(np.all(np.diff(need) <= 0))
     lam_rows = float(lam[0]) if single else np.repeat(lam, counts)[:, None]
-    heads = {}
-
-    def head(k):
-        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else G.shape[0]
-        if rows not in heads:
-            end = int(P.indptr[rows])
-            heads[rows] = (P if rows == G.shape[0] else
-                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
-        return rows, heads[rows]
+    head = _leading(P, offsets, need)
 
     V = G.copy()
     work = 0
@@ -493,16 +501,7 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
     # X = -P / sigma, the factor -2 / sigma (rounded once) taken into P's entries (rounded once)
     scale = np.repeat([-2.0 / (1.0 + math.ldexp(1.0, -p[1])) for p in plans], counts)
     P = sp.csr_matrix((P.data * np.repeat(scale, np.diff(P.indptr)), P.indices, P.indptr), shape=P.shape)
-    leading = bool(np.all(np.diff(degree) <= 0))
-    heads = {}
-
-    def head(k):
-        rows = int(offsets[np.count_nonzero(degree >= k)]) if leading else G.shape[0]
-        if rows not in heads:
-            end = int(P.indptr[rows])
-            heads[rows] = (P if rows == G.shape[0] else
-                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
-        return rows, heads[rows]
+    head = _leading(P, offsets, degree)
 
     t0 = np.array(G, dtype=float)
     W = np.repeat(C[:, 0], counts)[:, None] * t0
