@@ -393,8 +393,9 @@ def _recurrence_rounding(c, delta):
 
 
 def _local_rounding(P):
-    """delta of :func:`chebyshev_blocks`' notes for P's widest row."""
-    r = max(int(np.max(np.diff(P.indptr), initial=0)), 1)
+    """delta of :func:`chebyshev_blocks`' notes for P's widest row (one more than the given
+    matrix's, so that L's pattern serves for its P, whose diagonal is always stored)."""
+    r = int(np.max(np.diff(P.indptr), initial=0)) + 1
     eta = math.expm1(math.log1p(33.0 * U + _gamma(r) * (1.0 + 33.0 * U)) + 2.0 * math.log1p(U))
     return 2.0 * eta + 2.0 * U * (1.0 + eta) + U, r
 
