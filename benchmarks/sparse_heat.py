@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import os
 import platform
 import resource
 import sys
@@ -86,7 +87,7 @@ def main(argv=None):
     name, lap = load(args.mesh, args.subdivide)
     sources = np.random.default_rng(0).choice(lap.n, args.sources, replace=False)
     print(f"# {platform.processor() or platform.machine()}, {datetime.date.today()}, "
-          f"python {' '.join(sys.argv)}")
+          f"python {' '.join(sys.argv)}, load average {os.getloadavg()[0]:.1f}")
     print(f"# {name}: n = {lap.n}, unit area, tol = 1e-8, threshold = {args.threshold:g}, block = {args.block}")
     print("| t | time / Cholesky | CPU time / Cholesky's | Cholesky (s) | entries per column | traced peak (GB) | max RSS (GB) | "
           "products | max bound / peak | max dropped / peak | max dropped mass | outside bounds (stored, "
@@ -110,6 +111,7 @@ def main(argv=None):
         print(f"| {t:g} | {sec / chol:.2f} | {cpu / chol_cpu:.2f} | {chol:.2f} | {K.nnz / lap.n:.0f} | {peak / 2 ** 30:.2f} | "
               f"{rss:.2f} | {info['products']:.0f} | {rel.max():.1e} | "
               f"{np.max(info['dropped_max'] / d):.1e} | {info['dropped_mass'].max():.1e} | {bad} |", flush=True)
+        print(f"# load average after t = {t:g}: {os.getloadavg()[0]:.1f}", flush=True)
         del K, info
         if args.distances:
             lap.cache.clear()

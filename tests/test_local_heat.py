@@ -283,3 +283,77 @@ def test_stacked_regions_each_within_their_own_bound():
         assert np.all(missing <= lost[b, :cols.size] + REFERENCE)
     # a group's columns past its size are 0
     assert np.all(u[roff[2]:roff[3], 1:] == 0)
+
+
+def _sliver_grid():
+    """The jittered grid with one vertex next to its neighbour (1e-3 of a cell away): the
+    pair's elements make one rate 600 times the median."""
+    V, F = _grid()
+    i = 12 * 25 + 12
+    V[i] = V[i + 1] + np.array([-1e-3, 0.3e-3, 0.0]) / 24
+    return V, F
+
+
+MESHES["sliver"] = _sliver_grid
+
+
+def test_chebyshev_regions_against_dense_expm():
+    """Regions around a badly shaped element take the Chebyshev series: each column within
+    its proved bound of the region's own exact exponential (dense expm), entry by entry and in
+    the B-norm, and the heat it proves kept bounds what the region misses."""
+    import scipy.sparse as sp
+    from spectral_igl.approx import region
+    from spectral_igl.approx.region import dirichlet_heat_blocks, grow_regions, vertex_spacing
+
+    lap, _, _ = _exact("sliver")
+    t = 2e-4
+    i = 12 * 25 + 12
+    sources = np.array([0, 1, i, i + 3, i - 25, 620])
+    offsets = np.array([0, 2, 5, 6])
+    keys, roff = grow_regions(sp.csr_matrix(lap.L), vertex_spacing(lap), sources, offsets,
+                              np.array([0.05, 0.12, 0.08]), np.full(3, lap.n), lap.components)
+    calls = []
+    chebyshev = region.chebyshev_blocks
+
+    def spy(P, alpha, *args):
+        calls.append(np.asarray(alpha) * t)
+        return chebyshev(P, alpha, *args)
+
+    region.chebyshev_blocks = spy
+    try:
+        u, rel, add, lost, work = dirichlet_heat_blocks(lap, t, keys, roff, sources, offsets, 1e-14,
+                                                        allowance=np.full(3, 1e-10))
+    finally:
+        region.chebyshev_blocks = chebyshev
+    assert len(calls) == 1 and calls[0].size == 1 and calls[0][0] > 100     # the sliver's region only
+    L, m = lap.L.toarray(), lap.mass
+    for b in range(3):
+        R = keys[roff[b]:roff[b + 1]] % lap.n
+        cols = sources[offsets[b]:offsets[b + 1]]
+        G = np.zeros((R.size, cols.size))
+        G[np.searchsorted(R, cols), np.arange(cols.size)] = 1.0 / m[cols]
+        exact = sl.expm(-t * L[np.ix_(R, R)] / m[R][:, None]) @ G
+        got = u[roff[b]:roff[b + 1], :cols.size]
+        bound = rel[b] * got + add[roff[b]:roff[b + 1], :cols.size]
+        assert np.all(got >= 0) and np.all(np.abs(got - exact) <= bound + REFERENCE * exact.max())
+        full = sl.expm(-t * L / m[:, None]) @ (np.eye(lap.n)[:, cols] / m[cols])
+        assert np.all(m @ full - m[R] @ exact <= lost[b, :cols.size] + REFERENCE)
+    # the Chebyshev block's bound is not vacuous (B-norm allowance 1e-10 over the region's mass)
+    assert np.max(add[roff[1]:roff[2], :3]) < 1e-8 * np.max(u[roff[1]:roff[2], :3])
+    # and cheaper than uniformizing it
+    plain = dirichlet_heat_blocks(lap, t, keys, roff, sources, offsets, 1e-14)
+    assert work < 0.5 * plain[4]
+
+
+@pytest.mark.parametrize("t", [1e-5, 2e-4])
+def test_sparse_heat_kernel_with_a_sliver_every_entry(t):
+    lap, w, X = _exact("sliver")
+    exact = (X * np.exp(-t * w)) @ X.T
+    K, info = sig.sparse_heat_kernel(lap, t, threshold=1e-8, block=16, return_info=True)
+    Kd, E = K.toarray(), info["abs_error"].toarray()
+    stored = Kd > 0
+    slack = REFERENCE * exact.max(axis=0)[None, :]
+    assert np.all((np.abs(Kd - exact) <= E + slack)[stored])
+    assert np.all((exact <= info["dropped_max"][None, :] + slack)[~stored])
+    assert np.all(lap.mass @ np.where(stored, 0.0, exact) <= info["dropped_mass"] + REFERENCE)
+    assert np.all(info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass))

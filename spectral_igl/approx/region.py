@@ -25,6 +25,16 @@ the minimum over the source's component. :math:`K^R_t` is evaluated by
 computed values minus e, with every rounding accounted. Any region containing s serves, so a
 block of sources shares one region and one block of products (:func:`dirichlet_heat`).
 
+A region holding one poorly shaped element has a large rate :math:`\alpha`, and
+uniformization takes about :math:`t\alpha` products there. Given an ``allowance``,
+:func:`dirichlet_heat_blocks` evaluates such a region by the Chebyshev series of
+:math:`e^{-tA_R}` instead (:func:`~.uniformization.chebyshev_blocks`, about
+:math:`\sqrt{t\alpha\log(1/\varepsilon)}` products), whose error is proved in the
+:math:`B_R`-norm: :math:`\|d\|_{B} \le \varepsilon\|g\|_B`, so each entry is within
+:math:`\varepsilon\|g\|_B/\sqrt{B_{jj}}` and the heat kept in R within
+:math:`\sqrt{\sum_R B_{jj}}\,\varepsilon\|g\|_B` (Cauchy--Schwarz) of the computed one;
+the lower bound :math:`u - e \le K^R_t \le K_t` and the lost heat m are as above.
+
 R is the set of vertices within a distance r of the sources along edges of L of length
 :math:`\sqrt{(h^2_i + h^2_j)/2}`, :math:`h^2_j = 4B_{jj}/L_{jj}` (an equilateral mesh's squared
 edge length; :func:`grow_region`); no bound relies on it.
@@ -38,7 +48,8 @@ import scipy.sparse as sp
 
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
-from .uniformization import rate_matrix, terms, uniformize, uniformize_blocks
+from .uniformization import (chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix, terms,
+                             uniformize, uniformize_blocks)
 
 __all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
            "vertex_spacing", "heat_drift", "first_radius", "first_radii", "MAX_FRACTION", "BUDGET", "GROWTH",
@@ -330,7 +341,8 @@ def _lost(lap, t, kept, size):
     return np.maximum(top - kept, 0.0) * (1.0 + 4.0 * U)
 
 
-def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets, tail: float, mass=None):
+def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets, tail: float, mass=None,
+                          allowance=None):
     r""":func:`dirichlet_heat` for many groups of sources, each on its own region, in one series.
 
     The regions' Dirichlet operators are stacked into one block-diagonal operator, each block
@@ -351,6 +363,13 @@ def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets,
     tail : float
         Allowed truncation of the series, relative to each column's peak :math:`1/B_{ss}`.
     mass : (n,) float, optional
+    allowance : (g,) float, optional
+        When given, a region whose Chebyshev series
+        (:func:`~.uniformization.chebyshev_blocks`) is cheaper than its uniformization takes
+        it, with a B-norm error of at most ``allowance[b]`` :math:`/\sqrt{\sum_R B_{jj}}` times
+        the column's: the heat it proves kept in R is then within ``allowance[b]`` times the
+        column's B-norm (Cauchy--Schwarz) of the computed one. Its entries' bounds are then
+        absolute (``rel`` 0 but the rounding of :math:`1/B_{ss}`), not relative.
 
     Returns
     -------
@@ -382,24 +401,117 @@ def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets,
     stacked = sp.csr_matrix((L.data[pos[inside]], at[inside], indptr), shape=(keys.size, keys.size))
     del e, j, pos, target, at, inside
     m = mass[verts]
-    alpha, P = rate_matrix(stacked, m, region_offsets)
     counts = np.diff(offsets)
     width = int(counts.max())
     col = np.arange(sources.size) - np.repeat(offsets[:-1], counts)
     row = np.searchsorted(keys, np.repeat(np.arange(counts.size, dtype=np.int64), counts) * n + sources)
     G = np.zeros((keys.size, width))
     G[row, col] = 1.0 / mass[sources]
-    u, rel, add, work = uniformize_blocks(P, alpha, region_offsets, t, G, tail)
+    rsize = np.diff(region_offsets)
+    cheb = _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance)
+    if cheb is None:
+        alpha, P = rate_matrix(stacked, m, region_offsets)
+        u, rel, add, work = uniformize_blocks(P, alpha, region_offsets, t, G, tail)
+        bnorm = None
+    else:
+        u, rel, add, bnorm, work = _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb)
     del G
     # 1 / B_ss is rounded by u relative, which moves the exact kernel by as much (dirichlet_heat)
     # (and the products and sums forming e below, within 4u of e)
     rel = ((1.0 + 2.0 * U) * rel + 2.0 * U) * (1.0 + 4.0 * U)
     add = (1.0 + 2.0 * U) * add * (1.0 + 4.0 * U)
-    err = np.repeat(rel, np.diff(region_offsets))[:, None] * u + add
+    err = np.repeat(rel, rsize)[:, None] * u + add
     low = np.maximum(u - err, 0.0)
     low *= m[:, None]
     kept = np.add.reduceat(low, region_offsets[:-1], axis=0)
-    return u, rel, add, _lost(lap, t, kept, np.diff(region_offsets)[:, None]), work / L.nnz
+    if bnorm is not None:
+        kept = np.maximum(kept, _kept_bnorm(u, m, region_offsets, rel, bnorm))
+    return u, rel, add, _lost(lap, t, kept, rsize[:, None]), work / L.nnz
+
+
+#: a block takes the Chebyshev series when its degree is below this share of its Poisson terms
+CHEBYSHEV_GAIN = 0.85
+
+
+def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
+    """(is Chebyshev, rates, plans) of the regions of :func:`dirichlet_heat_blocks`: the blocks
+    whose Chebyshev degree at their B-norm allowance (``allowance`` over the square root of the
+    region's mass) is below :data:`CHEBYSHEV_GAIN` of their uniformization terms; None when none
+    is."""
+    if allowance is None:
+        return None
+    d = stacked.diagonal() / m
+    least = 1.0625 * np.maximum.reduceat(d, region_offsets[:-1])
+    lam = t * least
+    poisson = poisson_terms(t, least, tail)
+    try_ = np.flatnonzero(poisson >= 24)
+    if not try_.size:
+        return None
+    rates = least.copy()
+    rates[try_] = chebyshev_rate(least[try_])
+    volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))
+    eps = np.asarray(allowance, dtype=float)[try_] / np.sqrt(volume[try_])
+    # a stand-in P with the blocks' rates gives the widest row (the rounding of the products)
+    degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap))
+    use = (degree >= 0) & (degree < CHEBYSHEV_GAIN * poisson[try_])
+    if not use.any():
+        return None
+    mask = np.zeros(lam.size, dtype=bool)
+    mask[try_[use]] = True
+    chosen = [None] * lam.size
+    for b, p in zip(try_[use].tolist(), [plans[i] for i in np.flatnonzero(use)]):
+        chosen[b] = p
+    return mask, rates, chosen, volume
+
+
+def _sub_blocks(M, region_offsets, blocks):
+    """(rows, the block-diagonal M restricted to those blocks, their offsets)."""
+    sizes = np.diff(region_offsets)[blocks]
+    offs = np.r_[0, np.cumsum(sizes)]
+    rows = np.repeat(region_offsets[blocks] - offs[:-1], sizes) + np.arange(offs[-1])
+    owner, cols, pos = _edges(M, rows)
+    # block diagonal: a row's columns lie in its block, moved as its rows are
+    shift = np.repeat(offs[:-1] - region_offsets[blocks], sizes)[owner]
+    indptr = np.r_[0, np.cumsum(np.bincount(owner, minlength=rows.size))]
+    sub = sp.csr_matrix((M.data[pos], cols + shift, indptr), shape=(rows.size, rows.size))
+    return rows, sub, offs
+
+
+def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
+    """:func:`dirichlet_heat_blocks`' series: the chosen blocks by Chebyshev
+    (:func:`~.uniformization.chebyshev_blocks`), the others by uniformization, each a proof;
+    (u, rel, add, bnorm (g, w) with inf where uniformized, work)."""
+    mask, rates, plans, volume = cheb
+    u, add = np.empty_like(G), np.empty_like(G)
+    rel = np.zeros(mask.size)
+    bnorm = np.full((mask.size, G.shape[1]), np.inf)
+    work = 0
+    for use in (True, False):
+        blocks = np.flatnonzero(mask == use)
+        if not blocks.size:
+            continue
+        rows, sub, offs = _sub_blocks(stacked, region_offsets, blocks)
+        if use:
+            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks])
+            u[rows], add[rows], bnorm[blocks], w = chebyshev_blocks(
+                P, rates[blocks], offs, t, G[rows], m[rows], [plans[b] for b in blocks], volume[blocks])
+        else:
+            alpha, P = rate_matrix(sub, m[rows], offs)
+            u[rows], rel[blocks], add[rows], w = uniformize_blocks(P, alpha, offs, t, G[rows], tail)
+        work += w
+    return u, rel, add, bnorm, work
+
+
+def _kept_bnorm(u, m, region_offsets, rel, bnorm):
+    """A lower bound of each column's exact heat in its region from the B-norm bound of its
+    error (Cauchy--Schwarz: sum_j B_jj |d_j| <= sqrt(sum_j B_jj) ||d||_B), before the rounding
+    of the sum that :func:`_lost` takes off; 0 where it is not positive."""
+    size = np.diff(region_offsets)
+    heat = np.add.reduceat(m[:, None] * u, region_offsets[:-1], axis=0)
+    root = np.sqrt(np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(size + 2)))[:, None]
+    # the rounding of 1 / B_ss (rel) moves the exact heat by rel of it
+    low = (heat * (1.0 - rel[:, None]) - root * bnorm * (1.0 + 8.0 * U)) * (1.0 - 2.0 * U)
+    return np.maximum(np.nan_to_num(low, nan=0.0, neginf=0.0), 0.0)
 
 
 def _ball_measure(radius: float, d: int) -> float:

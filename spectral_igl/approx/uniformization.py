@@ -30,7 +30,10 @@ unit round-off) stay componentwise relative: :math:`|\tilde U - U| \le \rho\,\ti
 rounding. ``exp`` is taken to be within 4 units in the last place (glibc's is within 1).
 
 The cost is about :math:`1.1\text{--}1.6\,t\alpha` sparse products per block of columns: cheap at
-small t, expensive where one poorly shaped element makes :math:`\alpha` large.
+small t, expensive where one poorly shaped element makes :math:`\alpha` large. There
+:func:`chebyshev_blocks` takes the Chebyshev series of the same operator (about
+:math:`\sqrt{t\alpha\log(1/\varepsilon)}` products), its bound proved in the B-norm instead
+of entry by entry relative.
 """
 from __future__ import annotations
 
@@ -42,8 +45,11 @@ import scipy.sparse as sp
 from scipy.special import gammaln
 
 from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
+from ..filters import heat
+from .polynomial import ChebyshevPlan
 
-__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL"]
+__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL",
+           "chebyshev_rate", "chebyshev_terms", "chebyshev_blocks", "poisson_terms"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
 STEP = 512.0
@@ -63,7 +69,7 @@ def rate(lap):
     return lap.cache.fetch("bound", "uniformization", build)
 
 
-def rate_matrix(L, mass, offsets=None):
+def rate_matrix(L, mass, offsets=None, alpha=None):
     """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
     and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
     every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R.
@@ -71,12 +77,18 @@ def rate_matrix(L, mass, offsets=None):
     With ``offsets`` (increasing, from 0 to n, blocks of at least one row) L is block diagonal
     and each block b (rows ``offsets[b]:offsets[b+1]``) gets its own rate: alpha is then an
     array (0 for a block whose diagonal is 0, whose rows of P are the identity's) for
-    :func:`uniformize_blocks`."""
+    :func:`uniformize_blocks`; a given ``alpha`` (one rate per block, each at least the
+    17/16 max_j L_jj / mass_j of its block, e.g. from :func:`chebyshev_rate`) is used instead."""
     L = sp.csr_matrix(L, dtype=float)
     d = L.diagonal() / mass
     if offsets is not None:
         offsets = np.asarray(offsets, dtype=np.int64)
-        alpha = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
+        least = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
+        if alpha is None:
+            alpha = least
+        elif not np.all(np.asarray(alpha) >= least):
+            raise ValueError("alpha must be at least 17/16 of each block's largest L_jj / mass_j")
+        alpha = np.asarray(alpha, dtype=float)
         scale = np.repeat(np.where(alpha > 0, alpha, 1.0), np.diff(offsets))
     else:
         top = float(np.max(d)) if d.size else 0.0
@@ -104,7 +116,7 @@ def _terms_many(lams, tail):
     ``gammaln`` (taken within 1e-12 relative in the exponent's scale).
     """
     lams = np.asarray(lams, dtype=float)
-    log_tail = math.log(tail)
+    log_tail = np.broadcast_to(np.log(np.asarray(tail, dtype=float)), lams.shape)
     K = np.maximum(np.ceil(lams), 1.0)
     out_k, out_tau = np.zeros(lams.size, dtype=np.int64), np.zeros(lams.size)
     todo = np.arange(lams.size)
@@ -112,7 +124,7 @@ def _terms_many(lams, tail):
         lam, k = lams[todo], K[todo]
         lp = -lam + (k + 1) * np.log(lam) - gammaln(k + 2)
         lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(np.log(lam)))
-        ok = lt <= log_tail
+        ok = lt <= log_tail[todo]
         out_k[todo[ok]] = k[ok]
         out_tau[todo[ok]] = np.exp(lt[ok])
         K[todo] = k + np.maximum(1.0, np.floor(k / 256))
@@ -128,6 +140,18 @@ def terms(t: float, alpha: float, tail: float = TAIL) -> int:
         return sys.maxsize
     s, lam = _steps(t, alpha)
     return s * _terms(lam, tail / s)[0]
+
+
+def poisson_terms(t: float, alpha, tail: float = TAIL) -> np.ndarray:
+    """:func:`terms` of many rates at once (array; 0 where a rate is 0)."""
+    alpha = np.asarray(alpha, dtype=float)
+    lam = t * alpha
+    s = np.maximum(1.0, np.ceil(lam / STEP))
+    out = np.zeros(alpha.size, dtype=np.int64)
+    pos = lam > 0
+    if pos.any():
+        out[pos] = s[pos].astype(np.int64) * _terms_many(lam[pos] / s[pos], tail / s[pos])[0]
+    return out
 
 
 def _steps(t, alpha):
@@ -206,6 +230,25 @@ def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
     return (V[:, 0], err[:, 0]) if one else (V, err)
 
 
+def _leading(P, offsets, need):
+    """head(k) -> (rows, the leading rows x rows of P): the blocks still summing at term k, a
+    leading part of the block-diagonal P when the blocks come in decreasing order of their
+    terms ``need`` (its columns are those rows too); all of P otherwise."""
+    leading = bool(np.all(np.diff(need) <= 0))
+    n = P.shape[0]
+    heads = {}
+
+    def head(k):
+        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else n
+        if rows not in heads:
+            end = int(P.indptr[rows])
+            heads[rows] = (P if rows == n else
+                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
+        return rows, heads[rows]
+
+    return head
+
+
 def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = TAIL):
     r""":func:`uniformize` on a block-diagonal P whose blocks have their own rates, at once.
 
@@ -261,19 +304,8 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     r = max(int(np.max(np.diff(P.indptr), initial=0)), 1)
     lam = np.array(lams)
     single = alpha.size == 1
-    # blocks in decreasing order of terms: term k needs only the rows of the blocks still
-    # summing, a leading part of P (block diagonal: its columns are those rows too)
-    leading = bool(np.all(np.diff(need) <= 0))
     lam_rows = float(lam[0]) if single else np.repeat(lam, counts)[:, None]
-    heads = {}
-
-    def head(k):
-        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else G.shape[0]
-        if rows not in heads:
-            end = int(P.indptr[rows])
-            heads[rows] = (P if rows == G.shape[0] else
-                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
-        return rows, heads[rows]
+    head = _leading(P, offsets, need)
 
     V = G.copy()
     work = 0
@@ -305,3 +337,198 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     trunc = s * taus[:, None] * gmax * (1.0 + 1e-6) + tiny
     add = np.repeat(trunc, counts, axis=0)
     return V, rel, add, work
+
+
+# ----------------------------------------------------------------------------- Chebyshev
+#: a Chebyshev rate (:func:`chebyshev_rate`) is an integer below 2^RATE_BITS times a power of 2
+RATE_BITS = 6
+#: largest k of the spectral margin 2^-k of :func:`chebyshev_blocks` (so the interval's ends stay exact)
+MARGIN_BITS = 40
+_PLANS: dict = {}
+
+
+def chebyshev_rate(least):
+    """The smallest rates at least ``least`` (array, positive) of the form m 2^e with m an
+    integer below 2^:data:`RATE_BITS` (at most 1/32 above): the ends of the interval of
+    :func:`chebyshev_blocks` are then exact, and the series of nearby regions are shared."""
+    least = np.asarray(least, dtype=float)
+    e = np.floor(np.log2(least)) - (RATE_BITS - 1)
+    return np.ldexp(np.ceil(np.ldexp(least, -e.astype(int))), e.astype(int))
+
+
+def _margin(alpha, drift):
+    """k with 2^-k >= drift / alpha (the spectral margin of P), or 0 when none up to 1/2."""
+    if drift <= 0:
+        return MARGIN_BITS
+    k = int(math.floor(math.log2(alpha / drift)))
+    return min(k, MARGIN_BITS) if k >= 1 and math.ldexp(1.0, -min(k, MARGIN_BITS)) * alpha >= drift else 0
+
+
+def _plan(t, alpha, k, tol):
+    """Chebyshev coefficients of e^{-ts} on [-alpha 2^-k, alpha (2 + 2^-k)] (exact ends) with
+    their proved bound (:class:`~.polynomial.ChebyshevPlan`), cached."""
+    key = (t, alpha, k, tol)
+    if key not in _PLANS:
+        if len(_PLANS) > 4096:
+            _PLANS.clear()
+        a = -math.ldexp(alpha, -k)
+        plan = ChebyshevPlan(None, heat(t), a, 2.0 * alpha - a, tol)
+        _PLANS[key] = (plan.c, plan.scalar_error + plan.rounding)
+    return _PLANS[key]
+
+
+def _recurrence_rounding(c, delta):
+    """(A1, A2) of :func:`chebyshev_blocks`' notes for the coefficients c and the local
+    rounding delta: the computed sum is within A1 ||g||_B + A2 zeta of p(X) g."""
+    k = np.arange(c.size, dtype=float)
+    h = 0.5 * k * (k + 1.0)
+    if not delta * h[-1] < 0.5:
+        return np.inf, np.inf
+    grow = h / (1.0 - delta * h)
+    a = np.abs(c)
+    g = _gamma(c.size + 1)
+    A1 = (1.0 + g) * delta * float(a @ grow) + g * float(a.sum())
+    A2 = (1.0 + g) * float(a @ grow)
+    return A1 * (1.0 + 1e-6), A2 * (1.0 + 1e-6)
+
+
+def _local_rounding(P):
+    """delta of :func:`chebyshev_blocks`' notes for P's widest row (one more than the given
+    matrix's, so that L's pattern serves for its P, whose diagonal is always stored)."""
+    r = int(np.max(np.diff(P.indptr), initial=0)) + 1
+    eta = math.expm1(math.log1p(33.0 * U + _gamma(r) * (1.0 + 33.0 * U)) + 2.0 * math.log1p(U))
+    return 2.0 * eta + 2.0 * U * (1.0 + eta) + U, r
+
+
+def chebyshev_terms(P, alpha, t: float, eps, drift: float):
+    r"""Per block: (degree, the proved relative bound of :func:`chebyshev_blocks`' series) for a
+    B-norm error ``eps`` relative to the column's, or degree -1 where it cannot be met (the
+    rounding floor, or no spectral margin).
+
+    Parameters
+    ----------
+    P : csr_matrix
+        From :func:`rate_matrix` with the rates ``alpha``.
+    alpha : (nb,) float
+        From :func:`chebyshev_rate`.
+    t : float
+    eps : (nb,) float
+    drift : float
+        A bound of :math:`\max_j |(L\mathbf 1)_j| / B_{jj}` (the rows of P sum to at most
+        :math:`1 + \text{drift}/\alpha`).
+    """
+    delta, _ = _local_rounding(P)
+    out = np.full(len(alpha), -1, dtype=np.int64)
+    bounds = [None] * len(alpha)
+    for b, (a, e) in enumerate(zip(np.asarray(alpha, float).tolist(), np.asarray(eps, float).tolist())):
+        k = _margin(a, drift) if a > 0 else 0
+        if not k or not e > 0:
+            continue
+        tol = 10.0 ** (math.floor(2.0 * math.log10(e)) / 2.0)     # shared by nearby eps
+        c, err = _plan(t, a, k, 0.5 * tol)
+        A1, A2 = _recurrence_rounding(c, delta)
+        if err + A1 <= e:
+            out[b] = c.size - 1
+            bounds[b] = (c, k, err + A1, A2)
+    return out, bounds
+
+
+def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, volume):
+    r""":math:`e^{-t\alpha_b(I - P_b)}G_b` on a block-diagonal P by Chebyshev series, each block
+    with its own rate and degree, with a proved bound in the B-norm and per entry.
+
+    For a block with rate :math:`\alpha` and exact
+    :math:`P = I - B^{-1}L/\alpha` (B the block's ``mass``, L symmetric), P is self-adjoint in
+    the B inner product, non-negative, its rows summing to at most
+    :math:`\sigma = 1 + 2^{-k} \ge 1 + \text{drift}/\alpha`, so its spectrum lies in
+    :math:`[-\sigma, \sigma]` and :math:`A = \alpha(I - P)`'s in
+    :math:`[a, b] = [-\alpha 2^{-k}, \alpha(2 + 2^{-k})]` (exact floats: α from
+    :func:`chebyshev_rate`). With :math:`X = -P/\sigma = (2A - a - b)/(b - a)` and p the
+    Chebyshev expansion of :math:`e^{-ts}` on [a, b] (:class:`~.polynomial.ChebyshevPlan`:
+    its proved :math:`\max_{[a,b]}|e^{-ts} - p|` plus its coefficients' rounding, ε₀),
+    :math:`\|e^{-tA}g - p(A)g\|_B \le \varepsilon_0\|g\|_B`.
+
+    **Rounding.** The recurrence :math:`\hat t_{k+1} = \mathrm{fl}(\mathrm{fl}(\mathrm{fl}(
+    \mathrm{fl}(-2/\sigma)\hat P)\hat t_k) - \hat t_{k-1})` (the factor taken into P's
+    entries, each rounded once) with :math:`|\hat P - P| \le 33u P` and
+    rows of at most r entries has local errors :math:`|f_k| \le \tfrac{2}{\sigma}\eta P|\hat
+    t_k| + u(\tfrac2\sigma(1+\eta)P|\hat t_k| + |\hat t_{k-1}|) + \zeta_0`,
+    :math:`1 + \eta = (1 + 33u + \gamma_r(1+33u))(1+u)^2`, :math:`\zeta_0` the underflow of
+    r + 4 operations per entry; since :math:`\|P|v|\|_B \le \sigma\|v\|_B`,
+    :math:`\|f_k\|_B \le \delta\max(\|\hat t_k\|_B, \|\hat t_{k-1}\|_B) + \zeta`,
+    :math:`\delta = 2\eta + 2u(1+\eta) + u`, :math:`\zeta = \zeta_0\sqrt{\sum B}`. The errors
+    :math:`e_k = \hat t_k - T_k(X)g` obey the same recurrence driven by :math:`f_k`, so
+    :math:`e_k = \sum_{j<k}U_{k-1-j}(X)f_j` with :math:`\|U_m(X)\|_B \le m + 1`, and with
+    :math:`h_k = k(k+1)/2`, :math:`\|e_k\|_B \le E_k = h_k(\delta\|g\|_B + \zeta)/(1 - \delta
+    h_k)` (:math:`\|T_k(X)\|_B \le 1`). The sum :math:`\sum c_k\hat t_k` adds
+    :math:`\gamma_{m+1}\sum|c_k|(\|g\|_B + E_k)`. So the computed V is within
+    :math:`(\varepsilon_0 + A_1)\|g\|_B + A_2\zeta` of :math:`e^{-tA}g` in the B-norm
+    (:func:`chebyshev_terms`), and so is :math:`V^+` (the exact heat is non-negative), and
+    entry j within that over :math:`\sqrt{B_{jj}}`.
+
+    Parameters
+    ----------
+    P : (n, n) csr_matrix
+        Block diagonal, from :func:`rate_matrix` with the rates ``alpha`` and ``offsets``.
+    alpha : (nb,) float
+    offsets : (nb + 1,) int
+    t : float
+    G : (n, w) float, non-negative
+    mass : (n,) float
+        The rows' lumped masses (P's B).
+    plans : list
+        Per block, from :func:`chebyshev_terms` (none ``None``).
+    volume : (nb,) float
+        An upper bound of each block's :math:`\sum B_{jj}`.
+
+    Returns
+    -------
+    V : (n, w) float
+        Non-negative.
+    add : (n, w) float
+        Proved bound of each entry's error.
+    bnorm : (nb, w) float
+        Proved bound of each block column's error in the B-norm.
+    work : int
+        Stored entries of P multiplied.
+    """
+    offsets = np.asarray(offsets, dtype=np.int64)
+    counts = np.diff(offsets)
+    degree = np.array([p[0].size - 1 for p in plans])
+    K = int(degree.max(initial=0))
+    C = np.zeros((len(plans), K + 1))
+    for b, p in enumerate(plans):
+        C[b, :p[0].size] = p[0]
+    # X = -P / sigma, the factor -2 / sigma (rounded once) taken into P's entries (rounded once)
+    scale = np.repeat([-2.0 / (1.0 + math.ldexp(1.0, -p[1])) for p in plans], counts)
+    P = sp.csr_matrix((P.data * np.repeat(scale, np.diff(P.indptr)), P.indices, P.indptr), shape=P.shape)
+    head = _leading(P, offsets, degree)
+
+    t0 = np.array(G, dtype=float)
+    W = np.repeat(C[:, 0], counts)[:, None] * t0
+    work = 0
+    if K >= 1:
+        t1 = P @ t0
+        t1 *= 0.5
+        W += np.repeat(C[:, 1], counts)[:, None] * t1
+        work += P.nnz
+    for k in range(2, K + 1):
+        rows, Pk = head(k)
+        q = Pk @ t1[:rows]
+        new = t0[:rows]
+        np.subtract(q, new, out=new)              # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
+        t0, t1 = t1, t0
+        np.multiply(new, np.repeat(C[:, k], counts)[:rows, None], out=q)
+        W[:rows] += q
+        work += Pk.nnz
+    del t0, t1
+    np.maximum(W, 0.0, out=W)
+    _, r = _local_rounding(P)
+    zeta = (r + 4) * float(np.finfo(float).smallest_subnormal) * np.sqrt(np.asarray(volume, float))
+    norm = np.sqrt(np.add.reduceat(mass[:, None] * G * G, offsets[:-1], axis=0)) \
+        * (1.0 + _gamma(np.max(counts, initial=1) + 4))
+    rel = np.array([p[2] for p in plans])[:, None]
+    absolute = (np.array([p[3] for p in plans]) * zeta)[:, None]
+    bnorm = (rel * norm + absolute) * (1.0 + 4.0 * U)
+    add = np.repeat(bnorm, counts, axis=0) / np.sqrt(mass)[:, None] * (1.0 + 4.0 * U)
+    return W, add, bnorm, work
