@@ -407,6 +407,7 @@ def _inertia(lap, mu):
     return int(np.sum(d < 0)), backward if np.isfinite(backward) else None
 
 
+@serial_blas
 def dense_eigs(lap: Laplacian, k: int | None = None, max_n: int = 8000):
     r"""All (or the first ``k``) generalized eigenpairs by a dense solver: the ground truth.
 
