@@ -242,11 +242,12 @@ def test_polygon_mesh_geodesics_against_exact():
 
 
 def test_point_cloud_geodesics_sphere_and_disk():
-    """Points: great circles on the sphere, straight lines on a flat disk."""
+    """Points, step="euler" (the cloud's own heat step, the fans' gradient): great circles
+    on the sphere, straight lines on a flat disk."""
     from data_generators.surfaces import sphere_points
 
     P = sphere_points(2000, seed=0)
-    d = HeatGeodesics(sig.point_cloud_laplacian(P)).compute(0)
+    d = HeatGeodesics(sig.point_cloud_laplacian(P), step="euler").compute(0)
     exact = great_circle(P, 0)
     assert _mean_rel(d, exact) < 0.032                         # measured 0.0281 (potpourri3d 0.0251)
     assert np.abs(d - exact).max() < 0.1                       # measured 0.088
@@ -254,7 +255,7 @@ def test_point_cloud_geodesics_sphere_and_disk():
     r, a = np.sqrt(rng.random(3000)), 2 * np.pi * rng.random(3000)
     Q = np.c_[r * np.cos(a), r * np.sin(a), np.zeros(3000)]
     Q[0] = 0.0
-    d = HeatGeodesics(sig.point_cloud_laplacian(Q, boundary=True)).compute(0)
+    d = HeatGeodesics(sig.point_cloud_laplacian(Q, boundary=True), step="euler").compute(0)
     exact = np.linalg.norm(Q, axis=1)
     assert _mean_rel(d, exact) < 0.028                         # measured 0.0239 (potpourri3d 0.0233)
     assert np.abs(d - exact).max() < 0.04                      # measured 0.035
@@ -274,12 +275,14 @@ def test_point_cloud_objects_and_refusals():
 
 
 def test_point_cloud_geodesics_on_the_tufted_cover_at_or_below_potpourri3d():
-    """step="tufted_cover": the three steps on the cover of the stars, on the sphere and disk
-    of the test above, each below potpourri3d's PointCloudHeatSolver on the same points."""
+    """The default on a point cloud, step="tufted_cover": the three steps on the cover of
+    the stars, on the sphere and disk of the test above, each below potpourri3d's
+    PointCloudHeatSolver on the same points."""
     from data_generators.surfaces import sphere_points
 
     P = sphere_points(2000, seed=0)
-    solver = HeatGeodesics(sig.point_cloud_laplacian(P), step="tufted_cover")
+    solver = HeatGeodesics(sig.point_cloud_laplacian(P))
+    assert solver.step == "tufted_cover"
     d, exact = solver.compute(0), great_circle(P, 0)
     assert _mean_rel(d, exact) < 0.0251                        # measured 0.0218 (potpourri3d 0.0251)
     assert np.abs(d - exact).max() < 0.075                     # measured 0.064

@@ -154,22 +154,20 @@ class HeatGeodesics:
     On a polygon mesh (:func:`~spectral_igl.laplacian.polygon.polygon_laplacian`) the three
     steps run on the Laplacian's own refinement, every polygon a fan of triangles around
     its virtual vertex, and the distance is read on the polygon vertices. On a point cloud
-    (:func:`~spectral_igl.laplacian.points.point_cloud_laplacian`) the heat step is the
-    cloud's own :math:`(B + tL)^{-1}`; the gradient, divergence and Poisson step use the
-    triangles of every point's local Delaunay fan
-    (:func:`~spectral_igl.laplacian.points.local_triangles`), each with a third of its area
-    (a triangle is in up to three fans), so that the Poisson matrix is the stiffness of the
-    same gradient. With ``step="tufted_cover"`` all three steps run on the intrinsic
-    Delaunay triangulation of the tufted cover of those triangles (Sharp and Crane 2020,
-    potpourri3d's construction, on our fans:
+    (:func:`~spectral_igl.laplacian.points.point_cloud_laplacian`) all three steps run by
+    default on the intrinsic Delaunay triangulation of the tufted cover of the triangles of
+    every point's local Delaunay fan (:func:`~spectral_igl.laplacian.points.local_triangles`;
+    Sharp and Crane 2020, potpourri3d's construction, on our fans:
     :func:`~spectral_igl.laplacian.points.tufted_delaunay`), without the triangles that
     stand more than 55° on their fan's plane (bridges to a sheet closer than the spacing),
-    at :math:`t = 0.9h^2`. Mean relative error against ``igl.exact_geodesic`` at the
+    at :math:`t = 0.9h^2`. With ``step="euler"`` the heat step is the cloud's own
+    :math:`(B + tL)^{-1}` and the gradient, divergence and Poisson step use the fans'
+    triangles, each with a third of its area (a triangle is in up to three fans). Mean relative error against ``igl.exact_geodesic`` at the
     default t, beside potpourri3d on the same input (``benchmarks/geodesic_domains.py``: 12
     random sources, unit area; then ``--seed 1``): horse_quad (quads, exact on its
     triangulation) 1.8% (``PolygonMeshHeatSolver`` 33%, its
     ``MeshHeatMethodDistanceSolver`` on the triangulated quads 2.4%); point clouds, in %,
-    default / ``"tufted_cover"`` / ``PointCloudHeatSolver``:
+    ``step="euler"`` / the default (the cover) / ``PointCloudHeatSolver``:
 
     =========================== ================== ==================
     points                      draw 1             draw 2
@@ -183,9 +181,11 @@ class HeatGeodesics:
     cheburashka                 2.66 / 2.40 / 3.25 2.94 / 2.76 / 3.31
     =========================== ================== ==================
 
-    The default is behind potpourri3d on three or four clouds of a draw, by up to 14%;
-    ``"tufted_cover"`` only on cow (2,903 vertices, the coarsest sampling), by 2% and 6%
-    here and in one of five further draws, which is why it is not the default.
+    ``"euler"`` is behind potpourri3d on three or four clouds of a draw, by up to 14%; the
+    default only on cow (2,903 vertices, the coarsest sampling), by 2% and 6% here and in
+    one of five further draws. With Gaussian noise of 0.1 and 0.2 of the median spacing
+    (8 sources; the sphere's 4,000 points, spot's and homer's vertices) the default is
+    below potpourri3d in five of six cases and 5% above it on homer at 0.2.
 
     Parameters
     ----------
@@ -196,15 +196,16 @@ class HeatGeodesics:
         :func:`~spectral_igl.laplacian.points.point_cloud_laplacian`).
     t : float, optional
         Diffusion time; default :math:`h^2`, ``h`` the mean edge length (Crane's m = 1);
-        :math:`0.9h^2` with ``step="tufted_cover"``, ``h`` the mean edge length of the cover.
+        :math:`0.9h^2` on a point cloud's cover, ``h`` the mean edge length of the cover.
     step : {"euler", "intrinsic_delaunay", "engine", "tufted_cover"}, default "intrinsic_delaunay"
         How the heat is diffused. ``"euler"``: one backward-Euler step
         :math:`(B + tL)^{-1}` with ``lap``. ``"intrinsic_delaunay"``: the same step with
-        the intrinsic-Delaunay stiffness (triangles only; tets fall back to ``"euler"``).
+        the intrinsic-Delaunay stiffness (tets fall back to ``"euler"``; on a point cloud it
+        is ``"tufted_cover"``).
         ``"engine"``: the exact heat kernel :math:`e^{-t\tilde L}B^{-1}\delta` through
-        :class:`spectral_igl.SpectralOperator` (not on point clouds; there ``"euler"``
-        is the default's step). ``"tufted_cover"``: point clouds only, all three steps on
-        the tufted cover of the local triangles (above). The default is the most accurate against
+        :class:`spectral_igl.SpectralOperator` (not on point clouds). ``"tufted_cover"``:
+        point clouds only, all three steps on the tufted cover of the local triangles
+        (above; the default there). The default is the most accurate against
         exact geodesics on the meshes measured in ``benchmarks/geodesics.py``. The exact
         kernel is the least accurate there (17% to 62% mean relative error at
         :math:`t = h^2`): it decays like :math:`e^{-d^2/4t}`, so about 9 rings from the
@@ -260,6 +261,8 @@ class HeatGeodesics:
                              "method takes step='intrinsic_delaunay' (the default), 'euler' or 'tufted_cover'")
         if lap.domain == "tet" and step == "intrinsic_delaunay":
             step = "euler"
+        if lap.domain == "points" and step == "intrinsic_delaunay":
+            step = "tufted_cover"     # a cloud's intrinsic Delaunay triangulation is its cover's
         self._init_steps(step, t, progress)
 
     @property
