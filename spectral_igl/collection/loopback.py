@@ -134,7 +134,7 @@ class LoopbackCluster:
         Returns
         -------
         subprocess.Popen
-            The worker's process (also appended to :attr:`processes`).
+            The worker's process (also appended to ``processes``).
         """
         return self._start("dask_worker", "--scheduler-file", str(self.scheduler_file), "--nthreads", "1",
                            "--no-dashboard", "--host", "127.0.0.1", "--memory-limit", str(self.memory_limit))
