@@ -12,6 +12,7 @@ from ..filters import heat
 from ..laplacian import Laplacian, as_laplacian, laplacian
 from ..laplacian.elements import element_measures, pattern_components
 from ..laplacian.inputs import as_laplacian_or_triangles
+from ..laplacian import units
 from ..laplacian.units import optional_time
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
@@ -309,7 +310,7 @@ class HeatGeodesics:
             self.A = element_measures(V, C)
             Lp = Lh = lap.L
             M = sp.diags(lap.mass).tocsr()
-            self.h = mean_edge_length(V, C)
+            self.h = units.mean_edge_length(lap)      # cached on lap
         if t is None:
             self.t = (_POINT_TIME if step == "tufted_cover" else 1.0) * self.h ** 2
         else:
@@ -594,7 +595,7 @@ def varadhan_distance(lap_or_mesh, source, t: float | None = None, normalize: bo
     if src.size != 1:
         raise ValueError(f"source must be a single vertex for Varadhan's formula, got {src.size}")
     V, C = lap.data["V"], _cells(lap)
-    h = mean_edge_length(V, C)
+    h = units.mean_edge_length(lap)
     comp = lap.components == lap.components[src[0]]
     D = 2.0 if lap.domain == "triangle" else 3.0
 
