@@ -13,6 +13,9 @@ printed apart):
 - "run, w workers": ``collection.run`` in a fresh process, as a user's script calls it:
   the cluster's start (workers forked from a server that imports the package), dispatch,
   hashing the inputs, computing, writing one Zarr group per shape (synced), the stop.
+- "run, 2 workers, on a kept cluster": the same, on a cluster the script started before
+  (``collection.local_cluster``, as a session of several runs keeps one), so without the
+  cluster's start and stop.
 
 The machine may be shared, so every row also gives CPU time: the loop's, the sum inside the
 tasks (``time.process_time`` of the worker around each shape; the task thread's own
@@ -150,9 +153,15 @@ if __name__ == "__main__":
     inputs = small_shapes(spec["small"]) if spec["small"] else spec["paths"]
     job = Job.function(hks_relative if spec["job"] == "hks" else n_vertices)
     imports = time.perf_counter() - t0
+    client = None
+    if spec.get("kept"):            # a cluster started beforehand and kept (collection.local_cluster)
+        from distributed import Client
+        cluster = collection.local_cluster(spec["workers"])
+        client = Client(cluster)
+        client.wait_for_workers(spec["workers"])
     r0 = resource.getrusage(resource.RUSAGE_SELF)
     e0, t = time.time(), time.perf_counter()
-    s = collection.run(inputs, job, spec["out"], workers=spec["workers"], progress=False)
+    s = collection.run(inputs, job, spec["out"], workers=spec["workers"], scheduler=client, progress=False)
     wall, e1 = time.perf_counter() - t, time.time()
     r1 = resource.getrusage(resource.RUSAGE_SELF)
     cpu = r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime
@@ -168,13 +177,13 @@ def small_shapes(count):
     return [(f"s{i:04d}", V * (1 + i * 1e-3), F) for i in range(count)]
 
 
-def run_as_script(out, workers, job="hks", paths=(), small=0):
+def run_as_script(out, workers, job="hks", paths=(), small=0, kept=False):
     """``collection.run`` in a fresh process, as a user's script runs it (the client's
     imports apart): wall, epoch of start and end, the client's CPU during the run (it also
     runs the scheduler and starts the cluster)."""
     import json
 
-    spec = dict(out=str(out), workers=workers, job=job, paths=list(paths), small=small)
+    spec = dict(out=str(out), workers=workers, job=job, paths=list(paths), small=small, kept=kept)
     proc = subprocess.run([sys.executable, "-c", _RUN_ONE, str(Path(__file__).parent)], input=json.dumps(spec),
                           capture_output=True, text=True, check=True)
     res = json.loads(proc.stdout.strip().splitlines()[-1])
@@ -204,14 +213,14 @@ def task_times(out):
                 span=list(span.values()), n=len(res))
 
 
-def timed_run(out, workers, job="hks", paths=(), small=0):
+def timed_run(out, workers, job="hks", paths=(), small=0, kept=False):
     """A run as a script (:func:`run_as_script`), its store's task timings, and a rerun in
     this process that skips everything."""
     from spectral_igl import collection
     from spectral_igl.collection import Job
 
     shutil.rmtree(out, ignore_errors=True)
-    r = run_as_script(out, workers, job, paths, small)
+    r = run_as_script(out, workers, job, paths, small, kept)
     tt = task_times(out)
     inputs = small_shapes(small) if small else list(paths)
     t = time.perf_counter()
@@ -254,24 +263,27 @@ def speed_table(paths, tmp):
     print(f"| plain loop as a script | {fresh['wall']:.1f} | {60 * n / fresh['wall']:.0f} | {fresh['cpu']:.1f} | "
           f"{fresh['job_cpu'] / ljob:.2f} | {fresh['cpu']:.1f} | {lc / fresh['cpu']:.2f} | |")
     lines = []
-    for w in (1, 2):
-        r = timed_run(tmp / f"w{w}.zarr", w, paths=paths)
+    for w, kept in ((1, False), (2, False), (2, True)):
+        r = timed_run(tmp / f"w{w}{'k' if kept else ''}.zarr", w, paths=paths, kept=kept)
         busiest = max(r["per_worker"].values())
         # the client's CPU includes the cluster's start and stop (and, locally, the scheduler)
         pred = max(busiest, (r["cpu"] + r["client_cpu"]) / cores)
         full = pred + r["start"] + r["stop"]
-        print(f"| run, {w} worker{'s' if w > 1 else ''} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
+        label = f"run, {w} worker{'s' if w > 1 else ''}" + (", on a kept cluster (local_cluster)" if kept else "")
+        print(f"| {label} | {r['wall']:.1f} | {60 * n / r['wall']:.0f} | "
               f"{r['cpu']:.1f} / {busiest:.1f} / {r['client_cpu']:.1f} | {r['job_cpu'] / ljob:.2f} | "
               f"{pred:.1f} / {full:.1f} | {lc / pred:.2f} / {lc / full:.2f} | {r['rerun']:.2f} |")
-        lines.append(f"{w} worker(s): {timeline(r)}")
-        lines.append(f"{w} worker(s): job CPU {r['job_cpu']:.2f} s in the tasks' processes, "
+        if w == 2 and not kept:
+            started = r                 # the ceiling counts a run's own start and stop
+        lines.append(f"{label}: {timeline(r)}")
+        lines.append(f"{label}: job CPU {r['job_cpu']:.2f} s in the tasks' processes, "
                      f"{r['job_thread_cpu']:.2f} s in the task threads (the loop: {ljob:.2f} s); all tasks "
                      f"{r['cpu']:.2f} s, {r['thread_cpu']:.2f} s in the task threads")
     print(f"\nimports before the first shape, a fresh process: the loop's {fresh['import_cpu']:.2f} s CPU, "
           f"the run's client {r['client_imports']:.2f} s wall (both left out of the rows)")
     for line in lines:
         print(line)
-    ceiling(paths, r["split"], per_shape, lc, cores, r["start"] + r["stop"])
+    ceiling(paths, started["split"], per_shape, lc, cores, started["start"] + started["stop"])
     print(f"\nloop: job CPU {ljob:.1f} s of {lc:.1f} s CPU; load average after: {load_avg()}")
 
 

@@ -401,6 +401,33 @@ def test_local_workers_hold_one_task_and_no_profiler(tmp_path):
     assert np.all(states[:, 2:] == _monitor_periods()), states[:, 2:]
 
 
+
+def test_a_kept_local_cluster_has_the_workers_of_a_run(tmp_path):
+    """collection.local_cluster, kept across runs, gives workers set up as a run's own
+    (forked from the preloading server, WORKER_CONFIG's monitors), and two runs on it
+    reuse the same worker process; its arguments are checked before anything starts."""
+    import multiprocessing
+
+    from distributed import Client
+
+    for bad, err in ((0, ValueError), (True, TypeError), (1.5, TypeError)):
+        with pytest.raises(err, match="workers"):
+            collection.local_cluster(bad)
+    V, F = icosphere(0)
+    shapes = {f"s{i:02d}": (V * (1 + 0.01 * i), F) for i in range(4)}
+    with collection.local_cluster(1) as cluster, Client(cluster) as client:
+        pids = []
+        for out in ("a.zarr", "b.zarr"):
+            s = collection.run(shapes, Job.function(_worker_state), tmp_path / out, scheduler=client,
+                               progress=False)
+            assert s.ok and sorted(s.done) == sorted(shapes)
+            loaded = collection.load(tmp_path / out).results
+            states = np.array([r["result"] for r in loaded.values()])
+            assert np.all(states[:, 1] == ("forkserver" in multiprocessing.get_all_start_methods()))
+            assert np.all(states[:, 2:] == _monitor_periods()), states[:, 2:]
+            pids += [r.meta["pid"] for r in loaded.values()]
+    assert len(set(pids)) == 1
+
 _THREADS = """
 import os, sys
 import numpy as np

@@ -77,7 +77,8 @@ def test_docstring_example(test, tmp_path, monkeypatch):
     if missing:
         pytest.skip(f"needs {', '.join(missing)} (an extra of spectral-igl)")
     monkeypatch.chdir(tmp_path)
-    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    # verbose=False: doctest reads "-v" from sys.argv otherwise (pytest -v), and reports differently
+    runner = doctest.DocTestRunner(verbose=False, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     result = runner.run(test, out=lambda s: print(s, end=""))
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples failed in {test.name}"
 

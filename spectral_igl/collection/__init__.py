@@ -9,11 +9,12 @@ Usage::
 
 dask and zarr are imported only when a collection is run or loaded.
 """
-from .engine import RunSummary, Shape, collect_inputs, estimate_memory, inspect_shape, process_shape, run
+from .engine import (RunSummary, Shape, collect_inputs, estimate_memory, inspect_shape, local_cluster,
+                     process_shape, run)
 from .jobs import Job
 from .loopback import LoopbackCluster
 from .store import Loaded, ShapeResult, StoreInUse, load
 
-__all__ = ["run", "load", "Job", "RunSummary", "Loaded", "ShapeResult", "Shape",
+__all__ = ["run", "local_cluster", "load", "Job", "RunSummary", "Loaded", "ShapeResult", "Shape",
            "collect_inputs", "estimate_memory", "inspect_shape", "process_shape", "StoreInUse",
            "LoopbackCluster"]

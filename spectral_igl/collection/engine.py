@@ -20,13 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from .._extras import require
-from .._validate import as_flag, describe
+from .._validate import as_flag, as_int, describe
 from .._version import __version__
 from .jobs import Job
 from .store import (check_name, check_record, clean_partial, lock_store, open_root, publish, read_record,
                     stage_record, write_record)
 
-__all__ = ["run", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
+__all__ = ["run", "local_cluster", "RunSummary", "Shape", "collect_inputs", "estimate_memory", "process_shape",
            "process_batch", "inspect_shape", "input_hash", "estimate_nnz", "file_stat"]
 
 #: file types read by :func:`spectral_igl.io.read_mesh` (a directory input means these)
@@ -576,15 +576,65 @@ def _local_cluster(n, memory_limit, silence):
                             memory_limit=memory_limit, dashboard_address=None, silence_logs=silence)
 
 
+def local_cluster(workers: int | None = None, memory_limit="auto", progress: bool = False):
+    r"""The local cluster :func:`run` starts for itself, to keep across several runs.
+
+    :func:`run` without ``scheduler`` starts a cluster and stops it when it ends: about a
+    second on a 2-core machine (the workers' fork server importing the package, the
+    workers registering), which a long run does not notice and a short one does. A session
+    of several runs (a notebook, a script computing several jobs) starts this cluster once
+    and passes ``scheduler=client`` to each run.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Single-threaded worker processes (default: one per core).
+    memory_limit : str, int or float
+        Per-worker limit (dask's syntax, as in :func:`run`).
+    progress : bool
+        Let dask's warnings through (as :func:`run` does with ``progress=True``).
+
+    Returns
+    -------
+    distributed.LocalCluster
+        Its workers are forked from a server that has imported the package, with
+        :data:`WORKER_CONFIG`, exactly as :func:`run`'s own. Close it (or use it as a
+        context manager) when done.
+
+    Examples
+    --------
+    Two runs on one cluster (``tests/test_collection.py`` runs this):
+
+    >>> from distributed import Client
+    >>> from spectral_igl.collection import Job, local_cluster, run
+    >>> from spectral_igl.data_generators import icosphere
+    >>> with local_cluster(2) as cluster, Client(cluster) as client:  # doctest: +SKIP
+    ...     run({"ball": icosphere(2)}, Job.hks([0.01, 0.1]), "hks.zarr", scheduler=client)
+    ...     run({"ball": icosphere(2)}, Job.eigenvalues(10), "eigs.zarr", scheduler=client)
+
+    Its arguments are checked before anything starts:
+
+    >>> local_cluster(0)
+    Traceback (most recent call last):
+    ...
+    ValueError: workers must be an integer in [1, inf], got 0
+    """
+    require("distributed", "cluster", "spectral_igl.collection")
+    silence = logging.WARNING if as_flag(progress, "progress") else logging.ERROR
+    return _local_cluster(_worker_count(workers), memory_limit, silence)
+
+
+def _worker_count(workers) -> int:
+    """``workers``, or one per core when None (validated)."""
+    return (os.cpu_count() or 1) if workers is None else as_int(workers, "workers", lo=1)
+
+
 def _connect(scheduler, workers, memory_limit, silence):
     """(client, cluster or None, owned)."""
     from distributed import Client
 
     if scheduler is None:
-        n = int(workers) if workers is not None else (os.cpu_count() or 1)
-        if n < 1:
-            raise ValueError(f"workers must be >= 1, got {workers!r}")
-        cluster = _local_cluster(n, memory_limit, silence)
+        cluster = _local_cluster(_worker_count(workers), memory_limit, silence)
         return Client(cluster), cluster, True
     if isinstance(scheduler, Client):
         return scheduler, None, False
