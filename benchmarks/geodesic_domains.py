@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/geodesic_domains.py [--sources 12] [--seed 0] [--noise 0.2]
+    python benchmarks/geodesic_domains.py [--sources 12] [--seed 0] [--noise 0.2] [--json-dir docs/results]
 
 Mean relative error |d - d*| / d* over all vertices (sources excluded), averaged over random
 sources (``--seed`` draws another set), at unit area. d*: ``igl.exact_geodesic`` on the
@@ -11,7 +11,8 @@ the vertices of real meshes as point clouds), the great-circle distance for poin
 unit sphere. Peers on the same input:
 potpourri3d's ``PolygonMeshHeatSolver`` and ``MeshHeatMethodDistanceSolver`` (on the split
 quads), and its ``PointCloudHeatSolver``; ours on point clouds with the default step (the
-tufted cover) and with ``step="euler"``.
+tufted cover) and with ``step="euler"``. With ``--json-dir`` (and no noise) the table is
+also written as ``geodesic_domains.json`` for ``docs/results.md``.
 """
 from __future__ import annotations
 
@@ -25,12 +26,18 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import igl  # noqa: E402
+from _results import Table  # noqa: E402  (beside this script)
 
 import spectral_igl as sig  # noqa: E402
 from data_generators.surfaces import sphere_points  # noqa: E402
 from spectral_igl.io import read_mesh  # noqa: E402
 
 MESHES = ROOT.parent / "shared" / "data" / "meshes"
+COLUMNS = ["input (n)", "ours (default)", 'ours, `step="euler"`', "potpourri3d"]
+
+
+def pct(x) -> str:
+    return f"{100 * x:.2f}%"
 
 
 def rel_error(d, exact):
@@ -42,7 +49,7 @@ def mean_error(fn, sources, exact):
     return np.mean([rel_error(fn(s), e) for s, e in zip(sources, exact)])
 
 
-def polygons(rng, n_sources):
+def polygons(rng, n_sources, table):
     import potpourri3d as pp3d
 
     V, F = read_mesh(MESHES / "horse_quad.obj", polygons=True)
@@ -54,21 +61,21 @@ def polygons(rng, n_sources):
     ours = sig.HeatGeodesics(sig.polygon_laplacian(V, F))
     poly = pp3d.PolygonMeshHeatSolver(V, F)
     tri = pp3d.MeshHeatMethodDistanceSolver(V, Ft)
-    print(f"horse_quad (n={len(V)}): ours {mean_error(ours.compute, src, exact):.4f}  "
-          f"pp3d polygon {mean_error(lambda s: poly.compute_distance(np.array([s])), src, exact):.4f}  "
-          f"pp3d on the split quads {mean_error(tri.compute_distance, src, exact):.4f}")
+    table.add(f"horse_quad, quads ({len(V):,})", pct(mean_error(ours.compute, src, exact)), "",
+              f"{pct(mean_error(lambda s: poly.compute_distance(np.array([s])), src, exact))} "
+              f"(`PolygonMeshHeatSolver`); {pct(mean_error(tri.compute_distance, src, exact))} on the split quads")
 
 
-def points(rng, n_sources, noise=0.0):
+def points(rng, n_sources, table, noise=0.0):
     """Point clouds; with ``noise``, every point moved by a Gaussian of that many median
     nearest-neighbour spacings (the exact distances stay those of the clean surface)."""
     import potpourri3d as pp3d
     from scipy.spatial import cKDTree
 
-    cases = [("unit sphere, 4000 random points", sphere_points(4000, seed=1), None)]
+    cases = [("unit sphere, random points", sphere_points(4000, seed=1), None)]
     for name in ("spot.obj", "cow.obj", "homer.obj", "rocker-arm.obj", "fandisk.obj", "cheburashka.obj"):
         V, F = read_mesh(MESHES / name)
-        cases.append((f"{name} vertices", V / np.sqrt(igl.doublearea(V, F).sum() / 2.0), F))
+        cases.append((f"{name[:-4]}'s vertices", V / np.sqrt(igl.doublearea(V, F).sum() / 2.0), F))
     for name, P, F in cases:
         src = rng.choice(len(P), n_sources, replace=False)
         if F is None:
@@ -82,9 +89,8 @@ def points(rng, n_sources, noise=0.0):
         ours = sig.HeatGeodesics(lap)                      # the tufted cover
         euler = sig.HeatGeodesics(lap, step="euler")       # the cloud's own heat step
         peer = pp3d.PointCloudHeatSolver(P)
-        print(f"{name} (n={len(P)}): ours {mean_error(ours.compute, src, exact):.4f}  "
-              f"ours euler {mean_error(euler.compute, src, exact):.4f}  "
-              f"pp3d {mean_error(peer.compute_distance, src, exact):.4f}")
+        table.add(f"{name} ({len(P):,})", pct(mean_error(ours.compute, src, exact)),
+                  pct(mean_error(euler.compute, src, exact)), pct(mean_error(peer.compute_distance, src, exact)))
 
 
 def main(argv=None):
@@ -93,11 +99,14 @@ def main(argv=None):
     p.add_argument("--seed", type=int, default=0, help="seed of the random sources")
     p.add_argument("--noise", type=float, default=0.0,
                    help="point clouds only, each point moved by a Gaussian of this many median spacings")
+    p.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
     args = p.parse_args(argv)
     rng = np.random.default_rng(args.seed)
+    table = Table("geodesic_domains", COLUMNS, None if args.noise else args.json_dir)
     if not args.noise:
-        polygons(rng, args.sources)
-    points(rng, args.sources, args.noise)
+        polygons(rng, args.sources, table)
+    points(rng, args.sources, table, args.noise)
+    table.close()
 
 
 if __name__ == "__main__":
