@@ -314,7 +314,7 @@ def test_spectral_top_bounds_the_dense_spectrum(name):
     each region's B^-1 L and the spectral radius of B^-1 |L| (dense), and is well below twice
     the largest L_jj / B_jj (the row-sum bound's size) where neighbours' masses differ."""
     import scipy.sparse as sp
-    from spectral_igl.approx.uniformization import rate_matrix, spectral_top
+    from spectral_igl.approx.uniformization import abs_radius, rate_matrix, spectral_top
 
     lap, _, _ = _exact(name)
     L, m = sp.csr_matrix(lap.L), lap.mass
@@ -337,6 +337,12 @@ def test_spectral_top_bounds_the_dense_spectrum(name):
     _, P = rate_matrix(stacked, m[rows], offsets, alpha=0.5 * top, nonnegative=False)
     w = sl.eigvals(P[:offsets[1], :offsets[1]].toarray()).real
     assert w.min() >= -1 - 1e-12
+    # the B-norm of |P| (the recurrence's rounding): its spectral radius, near 1 for these meshes
+    omega = abs_radius(stacked, m[rows], offsets, 0.5 * top)
+    for b, R in enumerate(regions):
+        absP = np.abs(np.eye(R.size) - L[R][:, R].toarray() / (m[R][:, None] * 0.5 * top[b]))
+        radius = np.max(np.abs(np.linalg.eigvals(absP)))
+        assert radius <= omega[b] < 1.5
 
 
 def test_chebyshev_regions_against_dense_expm():

@@ -48,7 +48,7 @@ from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 from ..filters import heat
 from .polynomial import ChebyshevPlan
 
-__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "products_needed", "terms", "STEP", "TAIL",
+__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "abs_radius", "products_needed", "terms", "STEP", "TAIL",
            "chebyshev_rate", "chebyshev_terms", "chebyshev_blocks", "poisson_terms"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
@@ -117,16 +117,44 @@ def spectral_top(L, mass, offsets=None) -> np.ndarray:
     formed with at most 4 roundings and each row summed over at most r terms, so the computed
     maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs.
     """
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    start = offsets[:-1]
+    top = np.minimum(np.maximum.reduceat(d + off_row, start), np.maximum.reduceat(d + off_sym, start))
+    return top * grow
+
+
+def _row_sums(L, mass, offsets):
+    """(offsets, L_jj / B_jj, sum_k!=j |L_jk| / B_jj, sum_k!=j |L_jk| / sqrt(B_jj B_kk), the factor
+    (1 + gamma_{r+8})(1 + 4u) that makes a maximum of sums of these terms a proof)."""
     L = sp.csr_matrix(L, dtype=float)
     n = L.shape[0]
     offsets = np.asarray([0, n] if offsets is None else offsets, dtype=np.int64)
     rows = np.repeat(np.arange(n), np.diff(L.indptr))
-    a = np.abs(L.data)
-    by_row = np.bincount(rows, a, minlength=n) / mass
-    by_sym = np.bincount(rows, a / np.sqrt(mass[rows] * mass[L.indices]), minlength=n)
-    top = np.minimum(np.maximum.reduceat(by_row, offsets[:-1]), np.maximum.reduceat(by_sym, offsets[:-1]))
+    a = np.where(rows == L.indices, 0.0, np.abs(L.data))
+    d = np.abs(L.diagonal()) / mass
+    off_row = np.bincount(rows, a, minlength=n) / mass
+    off_sym = np.bincount(rows, a / np.sqrt(mass[rows] * mass[L.indices]), minlength=n)
     r = int(np.max(np.diff(L.indptr), initial=0))
-    return top * ((1.0 + _gamma(r + 8)) * (1.0 + 4.0 * U))
+    return offsets, d, off_row, off_sym, (1.0 + _gamma(r + 8)) * (1.0 + 4.0 * U)
+
+
+def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
+    r"""Per block (as in :func:`spectral_top`): a proved upper bound of
+    :math:`\|\,|P|\,\|_B = \rho(|P|)` for :math:`P = I - B^{-1}L/\alpha_b` (``alpha`` one rate
+    per block, at least half its :func:`spectral_top`): :math:`|P|` is self-adjoint in the B
+    inner product and non-negative, so its norm is its spectral radius, at most the smaller of
+    the largest row sums of :math:`|P|` and of :math:`B^{1/2}|P|B^{-1/2}`. About 1 where
+    neighbours' masses are alike (:func:`chebyshev_blocks`' rounding grows with it).
+
+    With :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, :math:`|1 - x_j|` is formed within
+    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top`."""
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    alpha = np.repeat(np.asarray(alpha, dtype=float), np.diff(offsets))
+    x = d / alpha
+    diag = np.abs(1.0 - x) + 4.0 * U * (1.0 + x)
+    start = offsets[:-1]
+    return np.minimum(np.maximum.reduceat(diag + off_row / alpha, start),
+                      np.maximum.reduceat(diag + off_sym / alpha, start)) * grow
 
 
 def _terms(lam, tail):
@@ -420,15 +448,18 @@ def _recurrence_rounding(c, delta):
     return A1 * (1.0 + 1e-6), A2 * (1.0 + 1e-6)
 
 
-def _local_rounding(P):
-    r"""delta of :func:`chebyshev_blocks`' notes (:math:`\|Q\|_B \le 3`) for P's widest row (one more than the given
-    matrix's, so that L's pattern serves for its P, whose diagonal is always stored)."""
+def _local_rounding(P, omega=1.0):
+    r"""(delta of :func:`chebyshev_blocks`' notes for :math:`\rho(|P|) \le` ``omega`` (array or
+    float), r) for P's widest row (one more than the given matrix's, so that L's pattern serves
+    for its P, whose diagonal is always stored)."""
     r = int(np.max(np.diff(P.indptr), initial=0)) + 1
     eta = math.expm1(math.log1p(33.0 * U + _gamma(r) * (1.0 + 33.0 * U)) + 2.0 * math.log1p(U))
-    return 3.0 * (2.0 * eta + 2.0 * U * (1.0 + eta)) + U, r
+    diag = 4.2 * U * (1.0 + U) ** 2 * (1.0 + _gamma(r))
+    omega = np.asarray(omega, dtype=float)
+    return (2.0 * (eta * omega + diag) + 2.0 * U * ((1.0 + eta) * omega + diag) + U) * (1.0 + 1e-6), r
 
 
-def chebyshev_terms(P, alpha, t: float, eps, drift: float):
+def chebyshev_terms(P, alpha, t: float, eps, drift: float, omega):
     r"""Per block: (degree, the proved relative bound of :func:`chebyshev_blocks`' series) for a
     B-norm error ``eps`` relative to the column's, or degree -1 where it cannot be met (the
     rounding floor, or no spectral margin).
@@ -444,8 +475,10 @@ def chebyshev_terms(P, alpha, t: float, eps, drift: float):
     drift : float
         A bound of :math:`\max_j |(L\mathbf 1)_j| / B_{jj}` (P's spectrum is at most
         :math:`1 + \text{drift}/\alpha`).
+    omega : (nb,) float
+        Each block's :func:`abs_radius` at its rate.
     """
-    delta, _ = _local_rounding(P)
+    delta = np.broadcast_to(_local_rounding(P, omega)[0], (len(alpha),))
     out = np.full(len(alpha), -1, dtype=np.int64)
     bounds = [None] * len(alpha)
     for b, (a, e) in enumerate(zip(np.asarray(alpha, float).tolist(), np.asarray(eps, float).tolist())):
@@ -454,7 +487,7 @@ def chebyshev_terms(P, alpha, t: float, eps, drift: float):
             continue
         tol = 10.0 ** (math.floor(2.0 * math.log10(e)) / 2.0)     # shared by nearby eps
         c, err = _plan(t, a, k, 0.5 * tol)
-        A1, A2 = _recurrence_rounding(c, delta)
+        A1, A2 = _recurrence_rounding(c, float(delta[b]))
         if err + A1 <= e:
             out[b] = c.size - 1
             bounds[b] = (c, k, err + A1, A2)
@@ -482,17 +515,17 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
 
     **Rounding.** The recurrence :math:`\hat t_{k+1} = \mathrm{fl}(\mathrm{fl}(\mathrm{fl}(
     \mathrm{fl}(-2/\sigma)\hat P)\hat t_k) - \hat t_{k-1})` (the factor taken into P's
-    entries, each rounded once) with :math:`|\hat P - P| \le 33u Q`,
-    :math:`Q = I + B^{-1}|L|/\alpha \ge |P|` entrywise (the diagonal
-    :math:`1 - L_{jj}/(B_{jj}\alpha)` may cancel), and
-    rows of at most r entries has local errors :math:`|f_k| \le \tfrac{2}{\sigma}\eta Q|\hat
-    t_k| + u(\tfrac2\sigma(1+\eta)Q|\hat t_k| + |\hat t_{k-1}|) + \zeta_0`,
-    :math:`1 + \eta = (1 + 33u + \gamma_r(1+33u))(1+u)^2`, :math:`\zeta_0` the underflow of
-    r + 4 operations per entry; Q is non-negative and self-adjoint in the B inner product, so
-    :math:`\|Q|v|\|_B \le \rho(Q)\|v\|_B \le (1 + \text{spectral\_top}/\alpha)\|v\|_B
-    \le 3\|v\|_B`, and
+    entries, each rounded once) with :math:`|\hat P - P| \le 33u|P| + 4.2u I` (the diagonal
+    :math:`1 - x_j`, :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, may cancel) and
+    rows of at most r entries has local errors :math:`|f_k| \le \tfrac{2}{\sigma}(\eta|P| +
+    \eta' I)|\hat t_k| + u(\tfrac2\sigma((1+\eta)|P| + \eta' I)|\hat t_k| + |\hat t_{k-1}|)
+    + \zeta_0`, :math:`1 + \eta = (1 + 33u + \gamma_r(1+33u))(1+u)^2`,
+    :math:`\eta' = 4.2u(1+u)^2(1+\gamma_r)`, :math:`\zeta_0` the underflow of
+    r + 4 operations per entry; :math:`|P|` is non-negative and self-adjoint in the B inner
+    product, so :math:`\|\,|P||v|\,\|_B \le \omega\|v\|_B` (:func:`abs_radius`), and
     :math:`\|f_k\|_B \le \delta\max(\|\hat t_k\|_B, \|\hat t_{k-1}\|_B) + \zeta`,
-    :math:`\delta = 3(2\eta + 2u(1+\eta)) + u`, :math:`\zeta = \zeta_0\sqrt{\sum B}`. The errors
+    :math:`\delta = 2(\eta\omega + \eta') + 2u((1+\eta)\omega + \eta') + u` (σ ≥ 1),
+    :math:`\zeta = \zeta_0\sqrt{\sum B}`. The errors
     :math:`e_k = \hat t_k - T_k(X)g` obey the same recurrence driven by :math:`f_k`, so
     :math:`e_k = \sum_{j<k}U_{k-1-j}(X)f_j` with :math:`\|U_m(X)\|_B \le m + 1`, and with
     :math:`h_k = k(k+1)/2`, :math:`\|e_k\|_B \le E_k = h_k(\delta\|g\|_B + \zeta)/(1 - \delta
