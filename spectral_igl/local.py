@@ -359,15 +359,22 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     n = lap.n
     per = {k: np.zeros(n) for k in ("dropped_max", "dropped_mass", "m_lost", "bnorm_error", "region", "rel", "add")}
     ctx = _context(lap, t, threshold, tol)
-    queue = deque(_first_groups(ctx, patches(lap.L, block)))
+    # the groups by decreasing width, a batch's groups at least half as wide as its first: its
+    # series is as wide as its widest group (the retries, queued apart, likewise)
+    queue = deque(sorted(_first_groups(ctx, patches(lap.L, block)), key=lambda g: -g[0].size))
+    retries = []
     pieces, products = [], 0.0
-    while queue:
-        batch, size = [], 0
+    while queue or retries:
+        if not queue:
+            queue = deque(sorted(retries, key=lambda g: -g[0].size))
+            retries = []
+        batch, size = [queue.popleft()], 0
+        size = batch[0][0].size
         # a small first batch calibrates the first radius (ctx["scale"]) for the others
-        while queue and size < (BATCH if pieces else FIRST_BATCH):
+        while queue and size < (BATCH if pieces else FIRST_BATCH) and 2 * queue[0][0].size >= batch[0][0].size:
             batch.append(queue.popleft())
             size += batch[-1][0].size
-        products += _solve_batch(ctx, batch, pieces, per, queue)
+        products += _solve_batch(ctx, batch, pieces, per, retries)
     K = _symmetric(n, pieces)
     warn_missed("sparse_heat_kernel", per["bnorm_error"], tol / np.sqrt(lap.mass), stacklevel=3)
     if not return_info:

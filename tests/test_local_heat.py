@@ -297,6 +297,54 @@ def _sliver_grid():
 MESHES["sliver"] = _sliver_grid
 
 
+def _graded_grid(N=24):
+    """Unit square whose cells' widths grow geometrically 1000-fold along x (right triangles,
+    so Metzler): lumped masses vary 1000-fold, and across neighbours."""
+    s = np.linspace(0.0, 1.0, N + 1)
+    X, Y = np.meshgrid((1000.0 ** s - 1.0) / 999.0, s, indexing="ij")
+    return np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)], grid_faces(N + 1, N + 1, False, False)
+
+
+MESHES["graded"] = _graded_grid
+
+
+@pytest.mark.parametrize("name", ["grid", "sliver", "graded", "two"])
+def test_spectral_top_bounds_the_dense_spectrum(name):
+    """spectral_top of stacked principal submatrices (regions) bounds the largest eigenvalue of
+    each region's B^-1 L and the spectral radius of B^-1 |L| (dense), and is well below twice
+    the largest L_jj / B_jj (the row-sum bound's size) where neighbours' masses differ."""
+    import scipy.sparse as sp
+    from spectral_igl.approx.uniformization import abs_radius, rate_matrix, spectral_top
+
+    lap, _, _ = _exact(name)
+    L, m = sp.csr_matrix(lap.L), lap.mass
+    rng = np.random.default_rng(1)
+    regions = [np.arange(lap.n), np.sort(rng.choice(lap.n, lap.n // 3, replace=False)), np.array([7])]
+    rows = np.concatenate(regions)
+    offsets = np.r_[0, np.cumsum([R.size for R in regions])]
+    stacked = sp.block_diag([L[R][:, R] for R in regions], format="csr")
+    top = spectral_top(stacked, m[rows], offsets)
+    for b, R in enumerate(regions):
+        LR = L[R][:, R].toarray()
+        assert sl.eigvalsh(LR, np.diag(m[R]))[-1] <= top[b]
+        assert np.max(np.abs(np.linalg.eigvals(np.abs(LR) / m[R][:, None]))) <= top[b] * (1 + 1e-12)
+    assert np.isclose(top[2], L[7, 7] / m[7], rtol=1e-13)
+    if name == "graded":
+        assert top[0] < 1.75 * np.max(L.diagonal() / m)
+    # a Chebyshev rate needs half of it, no less
+    with pytest.raises(ValueError, match="spectral_top"):
+        rate_matrix(stacked, m[rows], offsets, alpha=0.499 * top, nonnegative=False)
+    _, P = rate_matrix(stacked, m[rows], offsets, alpha=0.5 * top, nonnegative=False)
+    w = sl.eigvals(P[:offsets[1], :offsets[1]].toarray()).real
+    assert w.min() >= -1 - 1e-12
+    # the B-norm of |P| (the recurrence's rounding): its spectral radius, near 1 for these meshes
+    omega = abs_radius(stacked, m[rows], offsets, 0.5 * top)
+    for b, R in enumerate(regions):
+        absP = np.abs(np.eye(R.size) - L[R][:, R].toarray() / (m[R][:, None] * 0.5 * top[b]))
+        radius = np.max(np.abs(np.linalg.eigvals(absP)))
+        assert radius <= omega[b] < 1.5
+
+
 def test_chebyshev_regions_against_dense_expm():
     """Regions around a badly shaped element take the Chebyshev series: each column within
     its proved bound of the region's own exact exponential (dense expm), entry by entry and in
@@ -345,9 +393,9 @@ def test_chebyshev_regions_against_dense_expm():
     assert work < 0.5 * plain[4]
 
 
-@pytest.mark.parametrize("t", [1e-5, 2e-4])
-def test_sparse_heat_kernel_with_a_sliver_every_entry(t):
-    lap, w, X = _exact("sliver")
+@pytest.mark.parametrize("name, t", [("sliver", 1e-5), ("sliver", 2e-4), ("graded", 2e-6), ("graded", 1e-5)])
+def test_sparse_heat_kernel_with_a_sliver_every_entry(name, t):
+    lap, w, X = _exact(name)
     exact = (X * np.exp(-t * w)) @ X.T
     K, info = sig.sparse_heat_kernel(lap, t, threshold=1e-8, block=16, return_info=True)
     Kd, E = K.toarray(), info["abs_error"].toarray()

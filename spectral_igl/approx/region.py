@@ -48,8 +48,8 @@ import scipy.sparse as sp
 
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
-from .uniformization import (chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix, terms,
-                             uniformize, uniformize_blocks)
+from .uniformization import (abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
+                             spectral_top, terms, uniformize, uniformize_blocks)
 
 __all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
            "vertex_spacing", "heat_drift", "first_radius", "first_radii", "MAX_FRACTION", "BUDGET", "GROWTH",
@@ -448,11 +448,14 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
     if not try_.size:
         return None
     rates = least.copy()
-    rates[try_] = chebyshev_rate(least[try_])
+    # half the proved top of each region's spectrum: the series' interval, so its degree,
+    # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary)
+    rates[try_] = chebyshev_rate(0.5 * spectral_top(stacked, m, region_offsets)[try_])
     volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))
     eps = np.asarray(allowance, dtype=float)[try_] / np.sqrt(volume[try_])
     # a stand-in P with the blocks' rates gives the widest row (the rounding of the products)
-    degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap))
+    omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0))[try_]
+    degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap), omega)
     use = (degree >= 0) & (degree < CHEBYSHEV_GAIN * poisson[try_])
     if not use.any():
         return None
@@ -492,7 +495,7 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
             continue
         rows, sub, offs = _sub_blocks(stacked, region_offsets, blocks)
         if use:
-            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks])
+            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks], nonnegative=False)
             u[rows], add[rows], bnorm[blocks], w = chebyshev_blocks(
                 P, rates[blocks], offs, t, G[rows], m[rows], [plans[b] for b in blocks], volume[blocks])
         else:

@@ -48,7 +48,7 @@ from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 from ..filters import heat
 from .polynomial import ChebyshevPlan
 
-__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "products_needed", "terms", "STEP", "TAIL",
+__all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "abs_radius", "products_needed", "terms", "STEP", "TAIL",
            "chebyshev_rate", "chebyshev_terms", "chebyshev_blocks", "poisson_terms"]
 
 #: largest Poisson mean per step (e^-STEP stays far above the underflow threshold)
@@ -69,7 +69,7 @@ def rate(lap):
     return lap.cache.fetch("bound", "uniformization", build)
 
 
-def rate_matrix(L, mass, offsets=None, alpha=None):
+def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
     """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
     and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
     every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R.
@@ -78,16 +78,20 @@ def rate_matrix(L, mass, offsets=None, alpha=None):
     and each block b (rows ``offsets[b]:offsets[b+1]``) gets its own rate: alpha is then an
     array (0 for a block whose diagonal is 0, whose rows of P are the identity's) for
     :func:`uniformize_blocks`; a given ``alpha`` (one rate per block, each at least the
-    17/16 max_j L_jj / mass_j of its block, e.g. from :func:`chebyshev_rate`) is used instead."""
+    17/16 max_j L_jj / mass_j of its block) is used instead. With ``nonnegative=False`` a given
+    ``alpha`` need only be at least half of each block's :func:`spectral_top` (P may then have
+    negative diagonal entries, its spectrum in [-1, 1 + drift / alpha]: :func:`chebyshev_blocks`,
+    e.g. with rates from :func:`chebyshev_rate`)."""
     L = sp.csr_matrix(L, dtype=float)
     d = L.diagonal() / mass
     if offsets is not None:
         offsets = np.asarray(offsets, dtype=np.int64)
-        least = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
         if alpha is None:
-            alpha = least
-        elif not np.all(np.asarray(alpha) >= least):
+            alpha = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
+        elif nonnegative and not np.all(np.asarray(alpha) >= 1.0625 * np.maximum.reduceat(d, offsets[:-1])):
             raise ValueError("alpha must be at least 17/16 of each block's largest L_jj / mass_j")
+        elif not nonnegative and not np.all(np.asarray(alpha) >= 0.5 * spectral_top(L, mass, offsets)):
+            raise ValueError("alpha must be at least half of each block's spectral_top")
         alpha = np.asarray(alpha, dtype=float)
         scale = np.repeat(np.where(alpha > 0, alpha, 1.0), np.diff(offsets))
     else:
@@ -99,6 +103,58 @@ def rate_matrix(L, mass, offsets=None, alpha=None):
     P.setdiag(1.0 - d / scale)
     P.eliminate_zeros()
     return alpha, P
+
+
+def spectral_top(L, mass, offsets=None) -> np.ndarray:
+    r"""Per block of the block-diagonal, symmetric L (``offsets`` as in :func:`rate_matrix`; one
+    block when omitted): a proved upper bound of the spectral radius of
+    :math:`B^{-1}|L|` (B = diag(``mass``)), so of the largest eigenvalue of :math:`B^{-1}L`.
+
+    The smaller of two Gershgorin bounds, :math:`\max_i \sum_j |L_{ij}|/B_{ii}` (the rows of
+    :math:`B^{-1}|L|`) and :math:`\max_i \sum_j |L_{ij}|/\sqrt{B_{ii}B_{jj}}` (the rows of the
+    similar, symmetric :math:`B^{-1/2}|L|B^{-1/2}`), which is well below the first (and
+    below twice the largest :math:`L_{ii}/B_{ii}`) where the masses vary. Each term is
+    formed with at most 4 roundings and each row summed over at most r terms, so the computed
+    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs.
+    """
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    start = offsets[:-1]
+    top = np.minimum(np.maximum.reduceat(d + off_row, start), np.maximum.reduceat(d + off_sym, start))
+    return top * grow
+
+
+def _row_sums(L, mass, offsets):
+    """(offsets, L_jj / B_jj, sum_k!=j |L_jk| / B_jj, sum_k!=j |L_jk| / sqrt(B_jj B_kk), the factor
+    (1 + gamma_{r+8})(1 + 4u) that makes a maximum of sums of these terms a proof)."""
+    L = sp.csr_matrix(L, dtype=float)
+    n = L.shape[0]
+    offsets = np.asarray([0, n] if offsets is None else offsets, dtype=np.int64)
+    rows = np.repeat(np.arange(n), np.diff(L.indptr))
+    a = np.where(rows == L.indices, 0.0, np.abs(L.data))
+    d = np.abs(L.diagonal()) / mass
+    off_row = np.bincount(rows, a, minlength=n) / mass
+    off_sym = np.bincount(rows, a / np.sqrt(mass[rows] * mass[L.indices]), minlength=n)
+    r = int(np.max(np.diff(L.indptr), initial=0))
+    return offsets, d, off_row, off_sym, (1.0 + _gamma(r + 8)) * (1.0 + 4.0 * U)
+
+
+def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
+    r"""Per block (as in :func:`spectral_top`): a proved upper bound of
+    :math:`\|\,|P|\,\|_B = \rho(|P|)` for :math:`P = I - B^{-1}L/\alpha_b` (``alpha`` one rate
+    per block, at least half its :func:`spectral_top`): :math:`|P|` is self-adjoint in the B
+    inner product and non-negative, so its norm is its spectral radius, at most the smaller of
+    the largest row sums of :math:`|P|` and of :math:`B^{1/2}|P|B^{-1/2}`. About 1 where
+    neighbours' masses are alike (:func:`chebyshev_blocks`' rounding grows with it).
+
+    With :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, :math:`|1 - x_j|` is formed within
+    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top`."""
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    alpha = np.repeat(np.asarray(alpha, dtype=float), np.diff(offsets))
+    x = d / alpha
+    diag = np.abs(1.0 - x) + 4.0 * U * (1.0 + x)
+    start = offsets[:-1]
+    return np.minimum(np.maximum.reduceat(diag + off_row / alpha, start),
+                      np.maximum.reduceat(diag + off_sym / alpha, start)) * grow
 
 
 def _terms(lam, tail):
@@ -392,15 +448,18 @@ def _recurrence_rounding(c, delta):
     return A1 * (1.0 + 1e-6), A2 * (1.0 + 1e-6)
 
 
-def _local_rounding(P):
-    """delta of :func:`chebyshev_blocks`' notes for P's widest row (one more than the given
-    matrix's, so that L's pattern serves for its P, whose diagonal is always stored)."""
+def _local_rounding(P, omega=1.0):
+    r"""(delta of :func:`chebyshev_blocks`' notes for :math:`\rho(|P|) \le` ``omega`` (array or
+    float), r) for P's widest row (one more than the given matrix's, so that L's pattern serves
+    for its P, whose diagonal is always stored)."""
     r = int(np.max(np.diff(P.indptr), initial=0)) + 1
     eta = math.expm1(math.log1p(33.0 * U + _gamma(r) * (1.0 + 33.0 * U)) + 2.0 * math.log1p(U))
-    return 2.0 * eta + 2.0 * U * (1.0 + eta) + U, r
+    diag = 4.2 * U * (1.0 + U) ** 2 * (1.0 + _gamma(r))
+    omega = np.asarray(omega, dtype=float)
+    return (2.0 * (eta * omega + diag) + 2.0 * U * ((1.0 + eta) * omega + diag) + U) * (1.0 + 1e-6), r
 
 
-def chebyshev_terms(P, alpha, t: float, eps, drift: float):
+def chebyshev_terms(P, alpha, t: float, eps, drift: float, omega):
     r"""Per block: (degree, the proved relative bound of :func:`chebyshev_blocks`' series) for a
     B-norm error ``eps`` relative to the column's, or degree -1 where it cannot be met (the
     rounding floor, or no spectral margin).
@@ -408,16 +467,18 @@ def chebyshev_terms(P, alpha, t: float, eps, drift: float):
     Parameters
     ----------
     P : csr_matrix
-        From :func:`rate_matrix` with the rates ``alpha``.
+        From :func:`rate_matrix` with the rates ``alpha`` (or L: only its widest row is used).
     alpha : (nb,) float
-        From :func:`chebyshev_rate`.
+        From :func:`chebyshev_rate`, at least half of each block's :func:`spectral_top`.
     t : float
     eps : (nb,) float
     drift : float
-        A bound of :math:`\max_j |(L\mathbf 1)_j| / B_{jj}` (the rows of P sum to at most
+        A bound of :math:`\max_j |(L\mathbf 1)_j| / B_{jj}` (P's spectrum is at most
         :math:`1 + \text{drift}/\alpha`).
+    omega : (nb,) float
+        Each block's :func:`abs_radius` at its rate.
     """
-    delta, _ = _local_rounding(P)
+    delta = np.broadcast_to(_local_rounding(P, omega)[0], (len(alpha),))
     out = np.full(len(alpha), -1, dtype=np.int64)
     bounds = [None] * len(alpha)
     for b, (a, e) in enumerate(zip(np.asarray(alpha, float).tolist(), np.asarray(eps, float).tolist())):
@@ -426,7 +487,7 @@ def chebyshev_terms(P, alpha, t: float, eps, drift: float):
             continue
         tol = 10.0 ** (math.floor(2.0 * math.log10(e)) / 2.0)     # shared by nearby eps
         c, err = _plan(t, a, k, 0.5 * tol)
-        A1, A2 = _recurrence_rounding(c, delta)
+        A1, A2 = _recurrence_rounding(c, float(delta[b]))
         if err + A1 <= e:
             out[b] = c.size - 1
             bounds[b] = (c, k, err + A1, A2)
@@ -438,10 +499,14 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
     with its own rate and degree, with a proved bound in the B-norm and per entry.
 
     For a block with rate :math:`\alpha` and exact
-    :math:`P = I - B^{-1}L/\alpha` (B the block's ``mass``, L symmetric), P is self-adjoint in
-    the B inner product, non-negative, its rows summing to at most
-    :math:`\sigma = 1 + 2^{-k} \ge 1 + \text{drift}/\alpha`, so its spectrum lies in
-    :math:`[-\sigma, \sigma]` and :math:`A = \alpha(I - P)`'s in
+    :math:`P = I - B^{-1}L/\alpha` (B the block's ``mass``, L symmetric with non-positive
+    off-diagonal entries), P is self-adjoint in the B inner product. Write
+    :math:`L = L_0 + \mathrm{diag}(L\mathbf 1)` with :math:`L_0` a principal submatrix of a
+    matrix with zero row sums and non-positive off-diagonal entries, so positive semi-definite:
+    the spectrum of :math:`A = B^{-1}L` is at least :math:`-\max_j|(L\mathbf 1)_j|/B_{jj}
+    \ge -\text{drift}` and at most :func:`spectral_top` :math:`\le 2\alpha`
+    (:func:`rate_matrix` checks it), so P's lies in :math:`[-1, 1 + \text{drift}/\alpha]
+    \subset [-\sigma, \sigma]`, :math:`\sigma = 1 + 2^{-k}`, and A's in
     :math:`[a, b] = [-\alpha 2^{-k}, \alpha(2 + 2^{-k})]` (exact floats: α from
     :func:`chebyshev_rate`). With :math:`X = -P/\sigma = (2A - a - b)/(b - a)` and p the
     Chebyshev expansion of :math:`e^{-ts}` on [a, b] (:class:`~.polynomial.ChebyshevPlan`:
@@ -450,13 +515,17 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
 
     **Rounding.** The recurrence :math:`\hat t_{k+1} = \mathrm{fl}(\mathrm{fl}(\mathrm{fl}(
     \mathrm{fl}(-2/\sigma)\hat P)\hat t_k) - \hat t_{k-1})` (the factor taken into P's
-    entries, each rounded once) with :math:`|\hat P - P| \le 33u P` and
-    rows of at most r entries has local errors :math:`|f_k| \le \tfrac{2}{\sigma}\eta P|\hat
-    t_k| + u(\tfrac2\sigma(1+\eta)P|\hat t_k| + |\hat t_{k-1}|) + \zeta_0`,
-    :math:`1 + \eta = (1 + 33u + \gamma_r(1+33u))(1+u)^2`, :math:`\zeta_0` the underflow of
-    r + 4 operations per entry; since :math:`\|P|v|\|_B \le \sigma\|v\|_B`,
+    entries, each rounded once) with :math:`|\hat P - P| \le 33u|P| + 4.2u I` (the diagonal
+    :math:`1 - x_j`, :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, may cancel) and
+    rows of at most r entries has local errors :math:`|f_k| \le \tfrac{2}{\sigma}(\eta|P| +
+    \eta' I)|\hat t_k| + u(\tfrac2\sigma((1+\eta)|P| + \eta' I)|\hat t_k| + |\hat t_{k-1}|)
+    + \zeta_0`, :math:`1 + \eta = (1 + 33u + \gamma_r(1+33u))(1+u)^2`,
+    :math:`\eta' = 4.2u(1+u)^2(1+\gamma_r)`, :math:`\zeta_0` the underflow of
+    r + 4 operations per entry; :math:`|P|` is non-negative and self-adjoint in the B inner
+    product, so :math:`\|\,|P||v|\,\|_B \le \omega\|v\|_B` (:func:`abs_radius`), and
     :math:`\|f_k\|_B \le \delta\max(\|\hat t_k\|_B, \|\hat t_{k-1}\|_B) + \zeta`,
-    :math:`\delta = 2\eta + 2u(1+\eta) + u`, :math:`\zeta = \zeta_0\sqrt{\sum B}`. The errors
+    :math:`\delta = 2(\eta\omega + \eta') + 2u((1+\eta)\omega + \eta') + u` (σ ≥ 1),
+    :math:`\zeta = \zeta_0\sqrt{\sum B}`. The errors
     :math:`e_k = \hat t_k - T_k(X)g` obey the same recurrence driven by :math:`f_k`, so
     :math:`e_k = \sum_{j<k}U_{k-1-j}(X)f_j` with :math:`\|U_m(X)\|_B \le m + 1`, and with
     :math:`h_k = k(k+1)/2`, :math:`\|e_k\|_B \le E_k = h_k(\delta\|g\|_B + \zeta)/(1 - \delta
@@ -469,7 +538,8 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
     Parameters
     ----------
     P : (n, n) csr_matrix
-        Block diagonal, from :func:`rate_matrix` with the rates ``alpha`` and ``offsets``.
+        Block diagonal, from :func:`rate_matrix` with the rates ``alpha``, ``offsets`` and
+        ``nonnegative=False``.
     alpha : (nb,) float
     offsets : (nb + 1,) int
     t : float
