@@ -4,8 +4,9 @@ with one core kept busy by another process.
 Every other benchmark here runs with ``OPENBLAS_NUM_THREADS=1``; users run with the
 default (one thread per core). Each configuration runs in a fresh process: a heat column
 (t = 1e-3) and a biharmonic distance from (V, F) scaled to unit area, first and second
-source, as wall seconds and multiples of one Cholesky factorization of B + tL (cholespy)
-in the same process. ``--busy`` adds the rows with a spinning process on one core (it is
+source, then the HKS at 16 times (the common-pole fits) and the default WKS, as wall
+seconds and multiples of one Cholesky factorization of B + tL (cholespy) in the same
+process. ``--busy`` adds the rows with a spinning process on one core (it is
 stopped at the end).
 
     python benchmarks/threads.py ../shared/data/meshes/armadillo.obj --busy
@@ -21,7 +22,8 @@ import time
 
 import numpy as np
 
-CALLS = ("heat column, 1st", "heat column, 2nd", "biharmonic, 1st", "biharmonic, 2nd")
+CALLS = ("heat column, 1st", "heat column, 2nd", "biharmonic, 1st", "biharmonic, 2nd",
+         "HKS at 16 times (common poles)", "WKS, default grid")
 
 
 def child(path, t):
@@ -36,7 +38,8 @@ def child(path, t):
     factorize(lap.B + t * lap.L)
     chol = time.perf_counter() - start
     runs = [lambda: sig.heat_kernel(lap, t, 0), lambda: sig.heat_kernel(lap, t, 17),
-            lambda: sig.biharmonic_distance(lap, 0), lambda: sig.biharmonic_distance(lap, 17)]
+            lambda: sig.biharmonic_distance(lap, 0), lambda: sig.biharmonic_distance(lap, 17),
+            lambda: sig.hks(lap, np.geomspace(1e-4, 1e-1, 16)), lambda: sig.wks(lap, method="auto")]
     out = []
     for fn in runs:
         t0 = time.perf_counter()
