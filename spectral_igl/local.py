@@ -368,7 +368,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
         if not queue:
             queue = deque(sorted(retries, key=lambda g: -g[0].size))
             retries = []
-        batch, size = [queue.popleft()], 0
+        batch = [queue.popleft()]
         size = batch[0][0].size
         # a small first batch calibrates the first radius (ctx["scale"]) for the others
         while queue and size < (BATCH if pieces else FIRST_BATCH) and 2 * queue[0][0].size >= batch[0][0].size:

@@ -434,15 +434,14 @@ CHEBYSHEV_GAIN = 0.85
 
 
 def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
-    """(is Chebyshev, rates, plans) of the regions of :func:`dirichlet_heat_blocks`: the blocks
-    whose Chebyshev degree at their B-norm allowance (``allowance`` over the square root of the
-    region's mass) is below :data:`CHEBYSHEV_GAIN` of their uniformization terms; None when none
-    is."""
+    """(is Chebyshev, rates, plans, volumes) of the regions of :func:`dirichlet_heat_blocks`:
+    the blocks whose Chebyshev degree at their B-norm allowance (``allowance`` over the square
+    root of the region's mass) is below :data:`CHEBYSHEV_GAIN` of their uniformization terms;
+    None when none is."""
     if allowance is None:
         return None
     d = stacked.diagonal() / m
     least = 1.0625 * np.maximum.reduceat(d, region_offsets[:-1])
-    lam = t * least
     poisson = poisson_terms(t, least, tail)
     try_ = np.flatnonzero(poisson >= 24)
     if not try_.size:
@@ -453,15 +452,15 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
     rates[try_] = chebyshev_rate(0.5 * spectral_top(stacked, m, region_offsets)[try_])
     volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))
     eps = np.asarray(allowance, dtype=float)[try_] / np.sqrt(volume[try_])
-    # a stand-in P with the blocks' rates gives the widest row (the rounding of the products)
+    # each block's rho(|P|) at its rate (the rounding of the products grows with it)
     omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0))[try_]
     degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap), omega)
     use = (degree >= 0) & (degree < CHEBYSHEV_GAIN * poisson[try_])
     if not use.any():
         return None
-    mask = np.zeros(lam.size, dtype=bool)
+    mask = np.zeros(least.size, dtype=bool)
     mask[try_[use]] = True
-    chosen = [None] * lam.size
+    chosen = [None] * least.size
     for b, p in zip(try_[use].tolist(), [plans[i] for i in np.flatnonzero(use)]):
         chosen[b] = p
     return mask, rates, chosen, volume

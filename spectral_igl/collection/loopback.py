@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from .._validate import describe
-from .engine import WORKER_CONFIG
+from .engine import WORKER_CONFIG, WORKER_ENV
 
 __all__ = ["LoopbackCluster", "worker_environment"]
 
@@ -32,7 +32,8 @@ def worker_environment(extra_paths=(), env=None) -> dict:
     dict
         ``env`` with the folder of this ``spectral_igl`` and ``extra_paths`` first on
         ``PYTHONPATH`` (the workers import the same package as the client),
-        ``OPENBLAS_NUM_THREADS=1`` unless set, and :data:`~spectral_igl.collection.engine.WORKER_CONFIG`
+        the thread counts of ``engine.WORKER_ENV`` unless set, and
+        :data:`~spectral_igl.collection.engine.WORKER_CONFIG`
         as ``DASK_*`` variables (what a local cluster's workers get).
 
     Examples
@@ -48,7 +49,8 @@ def worker_environment(extra_paths=(), env=None) -> dict:
     if env.get("PYTHONPATH"):
         paths.append(env["PYTHONPATH"])
     env["PYTHONPATH"] = os.pathsep.join(paths)
-    env.setdefault("OPENBLAS_NUM_THREADS", "1")
+    for key, value in WORKER_ENV.items():     # the thread counts a local cluster's workers get
+        env.setdefault(key, value)
     for key, value in WORKER_CONFIG.items():
         env["DASK_" + key.upper().replace(".", "__").replace("-", "_")] = str(value)
     return env
