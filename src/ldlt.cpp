@@ -13,6 +13,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/shared_ptr.h>
+#include <nanobind/stl/string.h>
 
 #include <algorithm>
 #include <complex>
@@ -79,6 +80,21 @@ double min_work = 32768.0;
 bool ready() { return dgemm && zgemm && dtrsm && dtrmm && ztrsm && ztrmm; }
 inline bool use(double work) { return work >= min_work && ready(); }
 
+// front_blas's column blocks: the panel's and the trailing update's
+constexpr int front_nb = 64, front_cb = 128;
+
+// The largest BLAS calls of an operation, asked before it runs (the thread policy of
+// spectral_igl/linalg/threads.py): the largest m*n*k of its gemms, and the largest smaller
+// side min(m, n) of its trsm and trmm
+struct Largest {
+    double gemm = 0.0;
+    int trxm = 0;
+    void add_gemm(double m, double n, double k) {
+        if (m > 0 && n > 0 && k > 0) gemm = std::max(gemm, m * n * k);
+    }
+    void add_trxm(int m, int n) { trxm = std::max(trxm, std::min(m, n)); }
+};
+
 inline gemm_t<double> gemm_of(double *) { return dgemm; }
 inline gemm_t<cplx> gemm_of(cplx *) { return zgemm; }
 
@@ -144,6 +160,40 @@ struct Symbolic {
         return -1;
     }
     int nc(int J) const { return first[J + 1] - first[J]; }
+
+    // multiply-adds of supernode J's dense block in the factorization, in a substitution of
+    // k columns and in the selected inversion: the block goes to the BLAS from blas::min_work
+    double factor_work(int J) const { const double c = nc(J), r = m(J) - c; return c * c * (c + r) + r * r * c; }
+    double solve_work(int J, double k) const { return double(m(J)) * nc(J) * k; }
+    double inverse_work(int J) const { const double c = nc(J), r = m(J) - c; return r * r * c + c * c * (c + r); }
+
+    // The largest BLAS calls of the numeric factorization ("factor"), of a solve of k
+    // columns ("solve"; inverse_columns of k columns makes at most these) or of the
+    // selected inversion ("inverse"), call for call as Factor makes them
+    blas::Largest largest_blas(const std::string &op, int k) const {
+        if (op != "factor" && op != "solve" && op != "inverse")
+            throw std::invalid_argument("op must be 'factor', 'solve' or 'inverse', got '" + op + "'");
+        const char o = op[0];
+        blas::Largest out;
+        for (int J = 0; J < ns; ++J) {
+            const int c = nc(J), mr = m(J) - c;
+            if (o == 'f' && blas::use(factor_work(J))) {
+                // front_blas: the panel's first (largest) gemm, the trailing update's first
+                const int w = std::min(c, blas::front_nb);
+                if (w < c) out.add_gemm(m(J) - w, c - w, w);
+                out.add_gemm(mr, std::min(blas::front_cb, mr), c);
+            } else if (o == 's' && blas::use(solve_work(J, k))) {
+                out.add_trxm(k, c);
+                out.add_gemm(k, mr, c);
+            } else if (o == 'i' && blas::use(inverse_work(J))) {
+                out.add_trxm(mr, c);
+                out.add_trxm(c, c);
+                out.add_gemm(mr, c, mr);
+                out.add_gemm(c, c, mr);
+            }
+        }
+        return out;
+    }
 
     Symbolic(int n_, const int *indptr, const int *indices, i64 nnz, const int *p0) : n(n_), nnz_in(nnz) {
         // inverse of the given ordering
@@ -413,7 +463,7 @@ struct Factor {
                 }
             }
             T *Dj = &D[s.first[J]];
-            if (blas::use(double(nc) * nc * m + double(mr) * mr * nc)) {
+            if (blas::use(s.factor_work(J))) {
                 front_blas(F.data(), m, nc, Dj, s.first[J], W);
                 if (mr > 0) {
                     std::vector<T> U(size_t(mr) * mr);
@@ -480,7 +530,7 @@ struct Factor {
     // of the lower triangle. Leaves L in F[:, :nc] (its strictly upper part zeroed), D in
     // Dj and the update in F22's lower triangle.
     static void front_blas(T *F, const int m, const int nc, T *Dj, const int col0, std::vector<T> &W) {
-        constexpr int NB = 64, CB = 128;
+        constexpr int NB = blas::front_nb, CB = blas::front_cb;
         const int mr = m - nc;
         for (int kb = 0; kb < nc; kb += NB) {
             const int be = std::min(nc, kb + NB);
@@ -580,7 +630,7 @@ struct Factor {
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
             const int kk = int(c1 - c0), mr = m - nc;
-            if (blas::use(double(m) * nc * kk)) {
+            if (blas::use(s.solve_work(J, kk))) {
                 // X_J^T <- X_J^T L11^-T, then G = (L21 X_J)^T scattered into the rows below
                 T *XJ = x + size_t(f) * k + c0;
                 blas::trsm<T>('R', 'L', 'T', 'U', kk, nc, T(1), P, m, XJ, int(k));
@@ -621,7 +671,7 @@ struct Factor {
             const int m = s.m(J), nc = s.nc(J), f = s.first[J];
             const T *P = &Lx[s.lptr[J]];
             const int *r = &s.rows[s.rptr[J]];
-            if (blas::use(double(m) * nc * k)) {
+            if (blas::use(s.solve_work(J, double(k)))) {
                 // X_J^T -= X_R^T L21 (the rows below, gathered), then X_J^T <- X_J^T L11^-1
                 const int mr = m - nc;
                 T *XJ = x + size_t(f) * k;
@@ -699,7 +749,7 @@ struct Factor {
                 }
                 if (--pending[Par] == 0) std::vector<T>().swap(Z[Par]);
             }
-            if (blas::use(double(mr) * mr * nc + double(nc) * nc * (nc + mr))) {
+            if (blas::use(s.inverse_work(J))) {
                 // Y = L21 L11^-1; Z21 = -Zhat Y; Z11 = L11^-T D^-1 L11^-1 - Z21^T Y
                 Y.resize(size_t(mr) * nc);
                 for (int k = 0; k < nc; ++k) std::copy(P + size_t(k) * m + nc, P + size_t(k) * m + m, &Y[size_t(k) * mr]);
@@ -919,6 +969,14 @@ NB_MODULE(_ldlt, mod) {
         .def_ro("nnz_L", &Symbolic::nnz_L)
         .def_ro("n_supernodes", &Symbolic::ns)
         .def_ro("flops", &Symbolic::flops)
+        .def("largest_blas",
+             [](const Symbolic &s, const std::string &op, int k) {
+                 const blas::Largest c = s.largest_blas(op, k);
+                 return nb::make_tuple(c.gemm, c.trxm);
+             },
+             nb::arg("op"), nb::arg("k") = 1,
+             "(largest m*n*k of a gemm, largest min(m, n) of a trsm/trmm) that op ('factor', "
+             "'solve' of k columns or 'inverse') passes to the BLAS; zeros when it calls none.")
         .def("permutation", [](const Symbolic &s) {
             std::vector<int32_t> p(s.perm.begin(), s.perm.end());
             return to_numpy<int32_t>(std::move(p), {size_t(s.n)});

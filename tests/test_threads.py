@@ -1,4 +1,7 @@
 """The package's dense sections run with a limited BLAS thread count and restore the caller's."""
+import functools
+from contextlib import contextmanager
+
 import numpy as np
 import pytest
 
@@ -30,23 +33,129 @@ def test_limit_inside_and_restored_outside():
         assert _blas_threads() == before
 
 
-@pytest.mark.skipif(not available(), reason="LDLT extension not built")
-def test_ldlt_runs_serial(monkeypatch):
-    """The factorization's dense fronts call the BLAS: they run inside the limit."""
+def _grid(k, dim=2):
+    """(k^dim, k^dim) sparse: the grid Laplacian of a k x ... x k grid plus the identity."""
     import scipy.sparse as sp
-    calls = []
-    orig = threads.blas_threads
+    T = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(k, k))
+    A = sp.csc_matrix((1, 1))
+    for _ in range(dim):
+        A = sp.kron(A, sp.eye(k)) + sp.kron(sp.eye(A.shape[0]), T) if A.shape[0] > 1 else T
+    return (A + sp.eye(k ** dim)).tocsc()
 
-    def spy(limit=None):
-        calls.append(limit)
-        return orig(limit)
 
-    monkeypatch.setattr(threads, "blas_threads", spy)
-    A = sp.diags([-1.0, 4.0, -1.0], [-1, 0, 1], shape=(50, 50)).tocsr()
+class _RecordingBLAS:
+    """The BLAS routines the LDLᵀ extension calls, wrapped to record each call's sizes:
+    gemm's m·n·k, trsm's and trmm's min(m, n) (real routines; the complex ones untouched)."""
+
+    def __init__(self):
+        import ctypes
+        from spectral_igl.linalg import ldlt
+        self.ext, self.real = ldlt._ext(), ldlt._blas_addresses()
+        i, d, c, v = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_double), ctypes.c_char_p, ctypes.c_void_p
+        gemm_t = ctypes.CFUNCTYPE(None, c, c, i, i, i, d, v, i, v, i, d, v, i)
+        trxm_t = ctypes.CFUNCTYPE(None, c, c, c, c, i, i, d, v, i, v, i)
+        self.gemm, self.trxm = [], []
+        real = dict(zip(("dgemm", "zgemm", "dtrsm", "ztrsm", "dtrmm", "ztrmm"), self.real))
+
+        def gemm(*a, _f=gemm_t(real["dgemm"])):
+            self.gemm.append(float(a[2][0]) * a[3][0] * a[4][0])
+            _f(*a)
+
+        def trxm(*a, _f=None):
+            self.trxm.append(min(a[4][0], a[5][0]))
+            _f(*a)
+
+        self._keep = [gemm_t(gemm), trxm_t(functools.partial(trxm, _f=trxm_t(real["dtrsm"]))),
+                      trxm_t(functools.partial(trxm, _f=trxm_t(real["dtrmm"])))]
+        addr = [ctypes.cast(f, ctypes.c_void_p).value for f in self._keep]
+        self.ext.set_blas(addr[0], real["zgemm"], addr[1], real["ztrsm"], addr[2], real["ztrmm"])
+
+    def largest(self):
+        out = (max(self.gemm, default=0.0), max(self.trxm, default=0))
+        self.gemm.clear()
+        self.trxm.clear()
+        return out
+
+    def restore(self):
+        self.ext.set_blas(*self.real)
+
+
+@pytest.mark.skipif(not available(), reason="LDLT extension not built")
+@pytest.mark.parametrize("min_work", [None, 1000.0])
+def test_largest_blas_is_the_largest_call_made(min_work):
+    """The sizes the thread rule is decided on are those of the BLAS calls the factorization,
+    the solves and the selected inversion then make, on fronts below and above the BLAS's
+    thread thresholds (every front to the BLAS with a small ``min_work``)."""
+    from spectral_igl.linalg import ldlt
+    A = _grid(45)                            # 2,025 unknowns, separators of 45 and more
+    rec = _RecordingBLAS()
+    old = rec.ext.set_blas_min_work(min_work if min_work is not None else rec.ext.set_blas_min_work(0.0))
+    try:
+        fac = LDLT(A, ldlt.Pattern(A, ordering="minimum_degree"))
+        sym = fac.pattern.symbolic
+        assert rec.largest() == sym.largest_blas("factor") != (0.0, 0)
+        rng = np.random.default_rng(0)
+        for k in (1, 3, 8, 40):
+            x = fac.solve(rng.standard_normal((A.shape[0], k)))
+            assert rec.largest() == sym.largest_blas("solve", k)
+            assert np.abs(A @ x).max() < 1e3      # a solve, not only a call
+        cols = fac.inverse_columns(rng.choice(A.shape[0], 9, replace=False))
+        gemm, trxm = rec.largest()
+        assert cols.shape == (A.shape[0], 9)
+        assert gemm <= sym.largest_blas("solve", 9)[0] and trxm <= sym.largest_blas("solve", 9)[1]
+        fac.inverse_diagonal()
+        assert rec.largest() == sym.largest_blas("inverse")
+    finally:
+        rec.ext.set_blas_min_work(old)
+        rec.restore()
+    with pytest.raises(ValueError, match="op must be"):
+        sym.largest_blas("solves")
+
+
+@pytest.mark.skipif(not available(), reason="LDLT extension not built")
+def test_small_factorization_changes_no_threads(monkeypatch):
+    """Under OpenBLAS a factorization and solves whose BLAS calls all run on one thread enter
+    no section: no thread count is read or set, and the loaded libraries are never searched."""
+    if threads.may_thread():
+        pytest.skip("scipy's BLAS is not OpenBLAS: every section is entered")
+    searched = []
+    monkeypatch.setattr(threads, "_controller", [])
+    monkeypatch.setattr(threads, "ThreadpoolController", lambda: searched.append(1))
+    A = _grid(30)                                 # 900 unknowns: fronts of a few dozen
     fac = LDLT(A)
-    x = fac.solve(np.ones(50))
+    assert not threads.may_thread(*fac.pattern.symbolic.largest_blas("factor"))
+    x = fac.solve(np.ones(A.shape[0]))
+    fac.solve(np.ones((A.shape[0], 4)))
     assert np.allclose(A @ x, 1.0)
-    assert len(calls) >= 2
+    assert searched == []
+
+
+@pytest.mark.skipif(not available(), reason="LDLT extension not built")
+def test_large_factorization_runs_serial(monkeypatch):
+    """A factorization with a gemm the BLAS would thread runs inside the limit, and the
+    caller's thread count is back afterwards."""
+    from spectral_igl.linalg import ldlt
+    A = _grid(14, dim=3)                          # 2,744 unknowns: separators of 200 or so
+    pattern = ldlt.Pattern(A, ordering="minimum_degree")
+    assert threads.may_thread(*pattern.symbolic.largest_blas("factor"))
+    seen = []
+    orig = ldlt.blas_threads
+
+    @contextmanager
+    def watch(*args, **kwargs):
+        with orig(*args, **kwargs):
+            seen.append(_blas_threads())
+            yield
+
+    monkeypatch.setattr(ldlt, "blas_threads", watch)
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        before = _blas_threads()
+        if not before:
+            pytest.skip("no BLAS that threadpoolctl can see")
+        fac = LDLT(A, pattern)
+        assert _blas_threads() == before
+    assert seen and set(seen[0].values()) == {threads.MAX_BLAS_THREADS} == {1}
+    assert np.allclose(A @ fac.solve(np.ones(A.shape[0])), 1.0)
 
 
 #: dense LAPACK entry points the package calls (numpy.linalg, scipy.linalg)

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._extras import require
-from .threads import serial_blas
+from .threads import blas_threads
 
 __all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
 
@@ -224,9 +224,12 @@ def _one_nonzero_per_column(B):
 
 
 class LDLT:
-    """``A = P L D Lᵀ Pᵀ`` of a sparse symmetric matrix (real or complex symmetric)."""
+    """``A = P L D Lᵀ Pᵀ`` of a sparse symmetric matrix (real or complex symmetric).
 
-    @serial_blas
+    Its dense work runs in a thread section of :mod:`spectral_igl.linalg.threads` when its
+    largest BLAS call (from the symbolic analysis) could use several threads.
+    """
+
     def __init__(self, A, pattern: Pattern | None = None):
         A = _symmetric_csc(A)
         self.pattern = pattern if pattern is not None else Pattern(A)
@@ -238,13 +241,17 @@ class LDLT:
         ext = _ext()
         cls = ext.FactorZ if cplx else ext.FactorD
         try:
-            self._f = cls(self.pattern.symbolic, np.ascontiguousarray(vals, dtype=self.dtype))
+            with self._section("factor"):
+                self._f = cls(self.pattern.symbolic, np.ascontiguousarray(vals, dtype=self.dtype))
         except RuntimeError as exc:   # a zero pivot: the matrix is singular or needs pivoting
             raise ValueError(f"LDLT failed: {exc}") from None
         self.n = A.shape[0]
         self.nbytes = int(self.pattern.nnz_L * np.dtype(self.dtype).itemsize)
 
-    @serial_blas
+    def _section(self, op: str, k: int = 1):
+        """The thread section of ``op`` ("factor", "solve" of ``k`` columns, "inverse")."""
+        return blas_threads(calls=self.pattern.symbolic.largest_blas(op, k))
+
     def solve(self, b) -> np.ndarray:
         b = np.asarray(b)
         if b.shape[0] != self.n:
@@ -260,9 +267,9 @@ class LDLT:
                 X *= w
             return X.reshape(b.shape)
         B = np.ascontiguousarray(B, dtype=self.dtype)
-        return self._f.solve(B).reshape(b.shape)
+        with self._section("solve", B.shape[1]):
+            return self._f.solve(B).reshape(b.shape)
 
-    @serial_blas
     def inverse_columns(self, idx) -> np.ndarray:
         """(n, k) the columns ``idx`` of A⁻¹.
 
@@ -274,14 +281,14 @@ class LDLT:
         idx = np.ascontiguousarray(np.asarray(idx).reshape(-1), dtype=np.int64)
         if idx.size and (idx.min() < 0 or idx.max() >= self.n):
             raise ValueError(f"column indices must lie in [0, {self.n}), got range [{idx.min()}, {idx.max()}]")
-        return self._f.inverse_columns(idx)
+        with self._section("solve", idx.size):
+            return self._f.inverse_columns(idx)
 
-    @serial_blas
     def inverse_diagonal(self) -> np.ndarray:
         """diag(A⁻¹) by selected inversion."""
-        return self._f.inverse_diagonal()
+        with self._section("inverse"):
+            return self._f.inverse_diagonal()
 
-    @serial_blas
     def selected_inverse(self) -> sp.csc_matrix:
         r"""(n, n) sparse: the entries of A⁻¹ on the sparsity pattern of ``self.pattern``.
 
@@ -293,7 +300,9 @@ class LDLT:
         in the same order).
         """
         p = self.pattern
-        return sp.csc_matrix((self._f.selected_inverse(), p.indices, p.indptr), shape=(self.n, self.n))
+        with self._section("inverse"):
+            vals = self._f.selected_inverse()
+        return sp.csc_matrix((vals, p.indices, p.indptr), shape=(self.n, self.n))
 
     def pivots(self) -> np.ndarray:
         """(n,) the diagonal D of the factorization, in the original ordering (its signs are

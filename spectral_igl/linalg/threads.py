@@ -8,6 +8,19 @@ mesh took 21.9 s instead of 2.0 s with one core busy on a 2-core machine (one th
 same 2.0 s on a quiet machine). Those sections therefore run with at most
 :data:`MAX_BLAS_THREADS` threads (through threadpoolctl); the limit is
 lifted on leaving them, so the caller's own BLAS work keeps the caller's setting.
+
+A section that knows its largest BLAS calls beforehand (``calls``: the sparse LDLᵀ reads
+them from its symbolic analysis) is entered only when the BLAS could run one of them on more
+than one thread. The rule is OpenBLAS's, the BLAS scipy's wheels bring: a gemm runs on the
+calling thread alone while m·n·k ≤ 65536 · GEMM_MULTITHREAD_THRESHOLD (:data:`SERIAL_GEMM`,
+the threshold's default 4), a trsm or trmm while min(m, n) < 2 · GEMM_MULTITHREAD_THRESHOLD
+(:data:`SERIAL_TRXM`; OpenBLAS's ``interface/gemm.c`` and ``interface/trsm.c``). Under
+another BLAS behind scipy (per its build configuration) every section is entered. A small
+factorization thus changes no thread count and never pays threadpoolctl's search of the
+loaded libraries (5 ms, once per process: it resolves the path of every shared object, a
+third of a cold heat-geodesic precompute on cow). Measured: the heat-geodesic factorizations
+of cow, spot and homer (up to 6,000 vertices) (intrinsic Delaunay) make gemms of at most 0.07–0.15 M
+multiply-adds and enter no section; fandisk's (6,475) and larger ones enter one.
 """
 from __future__ import annotations
 
@@ -17,13 +30,19 @@ from contextlib import contextmanager
 
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["MAX_BLAS_THREADS", "blas_threads", "serial_blas"]
+__all__ = ["MAX_BLAS_THREADS", "SERIAL_GEMM", "SERIAL_TRXM", "blas_threads", "may_thread", "serial_blas"]
 
 #: threads the BLAS may use inside the package's dense sections; ``None``: no limit (the
 #: BLAS's own setting, e.g. OPENBLAS_NUM_THREADS)
 MAX_BLAS_THREADS = 1
 
+#: OpenBLAS runs a gemm of at most this many multiply-adds (m·n·k) on the calling thread
+SERIAL_GEMM = 65536 * 4
+#: OpenBLAS runs a trsm or trmm whose smaller side is below this on the calling thread
+SERIAL_TRXM = 2 * 4
+
 _controller = []
+_openblas = []
 _state = threading.local()      # depth of nested sections in this thread
 
 
@@ -38,14 +57,53 @@ def _blas_libraries():
     return _controller[0]
 
 
+def _scipy_uses_openblas() -> bool:
+    """True when scipy was built against OpenBLAS (its build configuration says so)."""
+    if not _openblas:
+        try:
+            import scipy
+
+            name = scipy.show_config(mode="dicts")["Build Dependencies"]["blas"]["name"]
+            _openblas.append("openblas" in str(name).lower())
+        except Exception:          # pragma: no cover - no configuration to read: assume any BLAS
+            _openblas.append(False)
+    return _openblas[0]
+
+
+def may_thread(gemm: float = 0.0, trxm: int = 0) -> bool:
+    """Whether the BLAS behind scipy may run a call as large as these on several threads.
+
+    Parameters
+    ----------
+    gemm : float
+        The largest m·n·k of the gemm calls.
+    trxm : int
+        The largest smaller side min(m, n) of the trsm and trmm calls.
+
+    Returns
+    -------
+    bool
+        False only under OpenBLAS with ``gemm <= SERIAL_GEMM`` and ``trxm < SERIAL_TRXM``.
+
+    Examples
+    --------
+    >>> from spectral_igl.linalg.threads import may_thread
+    >>> may_thread(gemm=1e9)
+    True
+    """
+    return not (_scipy_uses_openblas() and gemm <= SERIAL_GEMM and trxm < SERIAL_TRXM)
+
+
 @contextmanager
-def blas_threads(limit: int | None = None):
+def blas_threads(limit: int | None = None, calls: tuple[float, int] | None = None):
     """Context in which the BLAS uses at most ``limit`` threads (default
     :data:`MAX_BLAS_THREADS`; ``None`` there: no change).
 
     Cheap enough to wrap every solve: a nested section changes nothing, and an outer one only
     reads each library's thread count (a few microseconds) and sets those above the limit,
-    restoring them on leaving.
+    restoring them on leaving. With ``calls``, the (gemm, trxm) sizes of the largest BLAS
+    calls the section makes through scipy's BLAS (see :func:`may_thread`), a section whose
+    calls all run on one thread anyway changes nothing either.
 
     Examples
     --------
@@ -58,7 +116,7 @@ def blas_threads(limit: int | None = None):
     """
     limit = MAX_BLAS_THREADS if limit is None else limit
     depth = getattr(_state, "depth", 0)
-    if limit is None or depth:
+    if limit is None or depth or (calls is not None and not may_thread(*calls)):
         yield
         return
     limit = int(limit)
