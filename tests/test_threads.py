@@ -1,6 +1,7 @@
 """The package's dense sections run with a limited BLAS thread count and restore the caller's."""
 import functools
 from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -80,6 +81,56 @@ class _RecordingBLAS:
         self.ext.set_blas(*self.real)
 
 
+def _other_threads_cpu():
+    """CPU clock ticks spent so far by this process's threads other than the calling one."""
+    import os
+    import threading
+    me = threading.get_native_id()
+    total = 0
+    for tid in os.listdir("/proc/self/task"):
+        if int(tid) != me:
+            try:
+                with open(f"/proc/self/task/{tid}/stat") as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except OSError:         # the thread ended meanwhile
+                continue
+            total += int(fields[11]) + int(fields[12])     # utime, stime
+    return total
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="needs Linux's /proc")
+def test_gemms_the_rule_calls_serial_wake_no_blas_thread():
+    """Against the BLAS itself: with two BLAS threads allowed, gemms of SERIAL_GEMM
+    multiply-adds, square and thin, leave the BLAS's worker thread idle, while a gemm of 64
+    times as much work wakes it (so the measure sees threads)."""
+    if threads.may_thread():
+        pytest.skip("scipy's BLAS is not OpenBLAS: the rule enters every section")
+    import time
+
+    from scipy.linalg import blas
+    rng = np.random.default_rng(0)
+    shapes = [(64, 64, 64), (1, 512, 512), (512, 512, 1), (8, 256, 128), (1, 4096, 64), (2, 128, 1024)]
+    pairs = [(np.asfortranarray(rng.standard_normal((m, k))), np.asfortranarray(rng.standard_normal((k, n))))
+             for m, n, k in shapes]
+    assert {m * n * k for m, n, k in shapes} == {threads.SERIAL_GEMM}
+    big = np.asfortranarray(rng.standard_normal((256, 256)))
+
+    def ticks(fn, reps):
+        before = _other_threads_cpu()
+        for _ in range(reps):
+            fn()
+        return _other_threads_cpu() - before
+
+    with threadpoolctl.threadpool_limits(2, user_api="blas"):
+        if not _blas_threads() or set(_blas_threads().values()) != {2}:
+            pytest.skip("the BLAS's threads cannot be set to 2")
+        time.sleep(0.2)                   # the worker threads' start-up is not a call's
+        quiet = sum(ticks(lambda a=a, b=b: blas.dgemm(1.0, a, b), 300) for a, b in pairs)
+        busy = ticks(lambda: blas.dgemm(1.0, big, big), 40)
+    assert quiet == 0
+    assert busy > 0
+
+
 @pytest.mark.skipif(not available(), reason="LDLT extension not built")
 @pytest.mark.parametrize("min_work", [None, 1000.0])
 def test_largest_blas_is_the_largest_call_made(min_work):
@@ -89,7 +140,8 @@ def test_largest_blas_is_the_largest_call_made(min_work):
     from spectral_igl.linalg import ldlt
     A = _grid(45)                            # 2,025 unknowns, separators of 45 and more
     rec = _RecordingBLAS()
-    old = rec.ext.set_blas_min_work(min_work if min_work is not None else rec.ext.set_blas_min_work(0.0))
+    old = rec.ext.set_blas_min_work(0.0)
+    rec.ext.set_blas_min_work(old if min_work is None else min_work)
     try:
         fac = LDLT(A, ldlt.Pattern(A, ordering="minimum_degree"))
         sym = fac.pattern.symbolic

@@ -13,14 +13,19 @@ A section that knows its largest BLAS calls beforehand (``calls``: the sparse LD
 them from its symbolic analysis) is entered only when the BLAS could run one of them on more
 than one thread. The rule is OpenBLAS's, the BLAS scipy's wheels bring: a gemm runs on the
 calling thread alone while m·n·k ≤ 65536 · GEMM_MULTITHREAD_THRESHOLD (:data:`SERIAL_GEMM`,
-the threshold's default 4), a trsm or trmm while min(m, n) < 2 · GEMM_MULTITHREAD_THRESHOLD
-(:data:`SERIAL_TRXM`; OpenBLAS's ``interface/gemm.c`` and ``interface/trsm.c``). Under
-another BLAS behind scipy (per its build configuration) every section is entered. A small
-factorization thus changes no thread count and never pays threadpoolctl's search of the
-loaded libraries (5 ms, once per process: it resolves the path of every shared object, a
-third of a cold heat-geodesic precompute on cow). Measured: the heat-geodesic factorizations
-of cow, spot and homer (up to 6,000 vertices) (intrinsic Delaunay) make gemms of at most 0.07–0.15 M
-multiply-adds and enter no section; fandisk's (6,475) and larger ones enter one.
+the threshold's default 4; OpenBLAS's ``interface/gemm.c``; an OpenBLAS built with a smaller
+threshold would thread calls the rule leaves alone). Every trsm and trmm counts as threaded:
+OpenBLAS 0.3.30 (scipy 1.17's) threads a left trsm of 600 rows and one to seven columns,
+which its source's thresholds (both sides from 8) say it runs alone; with two threads and
+another process on one of two cores it took 0.33–11 ms instead of 0.07–0.14 ms (measured).
+Under another BLAS behind scipy (per its build configuration) every section is entered.
+
+A factorization, which calls only gemm, and solves whose blocks all stay below the
+compiled code's BLAS cut-off thus change no thread count and never pay threadpoolctl's search
+of the loaded libraries (5 ms, once per process: it resolves the path of every shared object,
+a third of a cold heat-geodesic precompute on cow). Measured: the heat-geodesic factorizations
+of cow, spot and homer (up to 6,000 vertices) make gemms of at most 0.07–0.15 M
+multiply-adds and enter no section; fandisk's (6,475 vertices, 1.1 M) and larger ones enter one.
 """
 from __future__ import annotations
 
@@ -30,7 +35,7 @@ from contextlib import contextmanager
 
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["MAX_BLAS_THREADS", "SERIAL_GEMM", "SERIAL_TRXM", "blas_threads", "may_thread", "serial_blas"]
+__all__ = ["MAX_BLAS_THREADS", "SERIAL_GEMM", "blas_threads", "may_thread", "serial_blas"]
 
 #: threads the BLAS may use inside the package's dense sections; ``None``: no limit (the
 #: BLAS's own setting, e.g. OPENBLAS_NUM_THREADS)
@@ -38,8 +43,6 @@ MAX_BLAS_THREADS = 1
 
 #: OpenBLAS runs a gemm of at most this many multiply-adds (m·n·k) on the calling thread
 SERIAL_GEMM = 65536 * 4
-#: OpenBLAS runs a trsm or trmm whose smaller side is below this on the calling thread
-SERIAL_TRXM = 2 * 4
 
 _controller = []
 _openblas = []
@@ -76,14 +79,14 @@ def may_thread(gemm: float = 0.0, trxm: int = 0) -> bool:
     Parameters
     ----------
     gemm : float
-        The largest m·n·k of the gemm calls.
+        The largest m·n·k of the gemm calls (0: none).
     trxm : int
-        The largest smaller side min(m, n) of the trsm and trmm calls.
+        The largest smaller side min(m, n) of the trsm and trmm calls (0: none).
 
     Returns
     -------
     bool
-        False only under OpenBLAS with ``gemm <= SERIAL_GEMM`` and ``trxm < SERIAL_TRXM``.
+        False only under OpenBLAS with ``gemm <= SERIAL_GEMM`` and no trsm or trmm.
 
     Examples
     --------
@@ -91,7 +94,7 @@ def may_thread(gemm: float = 0.0, trxm: int = 0) -> bool:
     >>> may_thread(gemm=1e9)
     True
     """
-    return not (_scipy_uses_openblas() and gemm <= SERIAL_GEMM and trxm < SERIAL_TRXM)
+    return not (_scipy_uses_openblas() and gemm <= SERIAL_GEMM and trxm == 0)
 
 
 @contextmanager
