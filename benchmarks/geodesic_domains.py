@@ -3,6 +3,7 @@
 Usage::
 
     python benchmarks/geodesic_domains.py [--sources 12] [--seed 0] [--noise 0.2] [--json-dir docs/results]
+                                          [--by-distance]
 
 Mean relative error |d - d*| / d* over all vertices (sources excluded), averaged over random
 sources (``--seed`` draws another set), at unit area. d*: ``igl.exact_geodesic`` on the
@@ -13,6 +14,11 @@ potpourri3d's ``PolygonMeshHeatSolver`` and ``MeshHeatMethodDistanceSolver`` (on
 quads), and its ``PointCloudHeatSolver``; ours on point clouds with the default step (the
 tufted cover) and with ``step="euler"``. With ``--json-dir`` (and no noise) the table is
 also written as ``geodesic_domains.json`` for ``docs/results.md``.
+
+``--by-distance`` also prints, for each point cloud, where the error is: the mean relative
+error of the default and of potpourri3d (and the signed error) by distance from the source in
+median point spacings, and how consistent the points' local Delaunay fans are (the share of
+their triangles listed by one fan only).
 """
 from __future__ import annotations
 
@@ -49,6 +55,33 @@ def mean_error(fn, sources, exact):
     return np.mean([rel_error(fn(s), e) for s, e in zip(sources, exact)])
 
 
+#: ``--by-distance``: bin edges of the distance from the source, in median point spacings
+BINS = (0, 2, 5, 10, 20, 40, np.inf)
+
+
+def by_distance(name, P, sources, exact, solvers):
+    """Print the mean (signed) relative error of each of ``solvers`` (label -> compute) by
+    distance from the source, in median spacings of ``P``, and the consistency of the fans."""
+    from scipy.spatial import cKDTree
+
+    from spectral_igl.laplacian.points import local_triangles
+
+    spacing = float(np.median(cKDTree(P).query(P, 2)[0][:, 1]))
+    T = local_triangles(P)
+    _, votes = np.unique(np.sort(T, axis=1), axis=0, return_counts=True)
+    print(f"{name}: {100 * np.mean(votes == 1):.0f}% of the local fans' triangles are in one fan only")
+    for label, fn in solvers.items():
+        err = [[] for _ in BINS[:-1]]
+        for s, e in zip(sources, exact):
+            d, m = fn(s), e > 1e-9 * e.max()
+            b = np.digitize(e[m] / spacing, BINS) - 1
+            for i, r in enumerate(err):
+                r.append(((d[m] - e[m]) / e[m])[b == i])
+        cells = [f"[{BINS[i]:g}, {BINS[i + 1]:g}) {100 * np.mean(np.abs(np.concatenate(r))):.2f}% "
+                 f"({100 * np.mean(np.concatenate(r)):+.2f}%)" for i, r in enumerate(err)]
+        print(f"  {label:12s} " + "; ".join(cells))
+
+
 def polygons(rng, n_sources, table):
     import potpourri3d as pp3d
 
@@ -66,9 +99,10 @@ def polygons(rng, n_sources, table):
               f"(`PolygonMeshHeatSolver`); {pct(mean_error(tri.compute_distance, src, exact))} on the split quads")
 
 
-def points(rng, n_sources, table, noise=0.0):
+def points(rng, n_sources, table, noise=0.0, bins=False):
     """Point clouds; with ``noise``, every point moved by a Gaussian of that many median
-    nearest-neighbour spacings (the exact distances stay those of the clean surface)."""
+    nearest-neighbour spacings (the exact distances stay those of the clean surface); with
+    ``bins``, the errors by distance from the source (:func:`by_distance`)."""
     import potpourri3d as pp3d
     from scipy.spatial import cKDTree
 
@@ -91,6 +125,8 @@ def points(rng, n_sources, table, noise=0.0):
         peer = pp3d.PointCloudHeatSolver(P)
         table.add(f"{name} ({len(P):,})", pct(mean_error(ours.compute, src, exact)),
                   pct(mean_error(euler.compute, src, exact)), pct(mean_error(peer.compute_distance, src, exact)))
+        if bins:
+            by_distance(name, P, src, exact, {"ours": ours.compute, "potpourri3d": peer.compute_distance})
 
 
 def main(argv=None):
@@ -100,12 +136,14 @@ def main(argv=None):
     p.add_argument("--noise", type=float, default=0.0,
                    help="point clouds only, each point moved by a Gaussian of this many median spacings")
     p.add_argument("--json-dir", help="also write the table as JSON in this folder (docs/results)")
+    p.add_argument("--by-distance", action="store_true",
+                   help="point clouds: also print the errors by distance from the source")
     args = p.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     table = Table("geodesic_domains", COLUMNS, None if args.noise else args.json_dir)
     if not args.noise:
         polygons(rng, args.sources, table)
-    points(rng, args.sources, table, args.noise)
+    points(rng, args.sources, table, args.noise, args.by_distance)
     table.close()
 
 
