@@ -542,8 +542,10 @@ def first_radii(t: float, h2, goal) -> np.ndarray:
     h2 = np.asarray(h2, dtype=float)
     goal = np.asarray(goal, dtype=float)
     radii = _gaussian_radius(t, goal)
-    for i in np.flatnonzero(4.25 * t / h2 < 0.2):      # the hop regime: few sources, one by one
-        radii[i] = first_radius(t, float(h2[i]), float(goal[i]))
+    hop = np.flatnonzero(4.25 * t / h2 < 0.2)
+    if hop.size:
+        hops = np.minimum(poisson_terms(t, 4.25 / h2[hop], np.minimum(goal[hop], 0.5)), 6)
+        radii[hop] = np.maximum(radii[hop], hops * np.sqrt(h2[hop]))
     return radii
 
 

@@ -198,15 +198,17 @@ def terms(t: float, alpha: float, tail: float = TAIL) -> int:
     return s * _terms(lam, tail / s)[0]
 
 
-def poisson_terms(t: float, alpha, tail: float = TAIL) -> np.ndarray:
-    """:func:`terms` of many rates at once (array; 0 where a rate is 0)."""
+def poisson_terms(t: float, alpha, tail=TAIL) -> np.ndarray:
+    """:func:`terms` of many rates (and tails, one or one per rate) at once (array; 0 where a
+    rate is 0)."""
     alpha = np.asarray(alpha, dtype=float)
+    tail = np.broadcast_to(np.asarray(tail, dtype=float), alpha.shape)
     lam = t * alpha
     s = np.maximum(1.0, np.ceil(lam / STEP))
     out = np.zeros(alpha.size, dtype=np.int64)
     pos = lam > 0
     if pos.any():
-        out[pos] = s[pos].astype(np.int64) * _terms_many(lam[pos] / s[pos], tail / s[pos])[0]
+        out[pos] = s[pos].astype(np.int64) * _terms_many(lam[pos] / s[pos], tail[pos] / s[pos])[0]
     return out
 
 
