@@ -806,6 +806,111 @@ Out<T> to_numpy(std::vector<T> &&v, std::vector<size_t> shape) {
     return Out<T>(buf->data(), shape.size(), shape.data(), owner);
 }
 
+// ------------------------------------------------------------------------- Chebyshev series
+// Terms 2..K of the Chebyshev recurrence of spectral_igl.approx.uniformization.chebyshev_blocks
+// on a block-diagonal CSR matrix P (n x n, its factor -2/sigma taken in) and row-major blocks
+// of w columns. At term k the leading rows[k] rows take one pass each:
+//     t_k = P t_{k-1} - t_{k-2} (in t_{k-2}'s place), W += C[b, k] t_k (b the row's block).
+// Every entry is rounded exactly as the numpy form (q = P @ t1, summed in stored order from
+// 0; q - t0; W += coef * t) rounds it, so the two agree bit for bit and the series' proved
+// rounding bound holds for both. No fused multiply-add: the AVX2 clone is compiled without
+// FMA, and the baseline has none.
+template <int WC, class I>
+ISA_BODY void chebyshev_term(int64_t rows, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                             const double *Ck, int64_t stride, const double *t1, double *t0, double *W) {
+    const int width = WC > 0 ? WC : w;
+    double qbuf[WC > 0 ? WC : 1];
+    std::vector<double> qvec(WC > 0 ? 0 : size_t(width));
+    double *q = WC > 0 ? qbuf : qvec.data();
+    for (int64_t b = 0; off[b] < rows; ++b) {
+        const double k = Ck[b * stride];
+        const int64_t end = std::min(off[b + 1], rows);
+        for (int64_t i = off[b]; i < end; ++i) {
+            for (int c = 0; c < width; ++c) q[c] = 0.0;
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const double *x = t1 + int64_t(ix[p]) * width;
+                for (int c = 0; c < width; ++c) q[c] += a * x[c];
+            }
+            double *y = t0 + i * width, *acc = W + i * width;
+            for (int c = 0; c < width; ++c) {
+                const double t = q[c] - y[c];
+                y[c] = t;
+                acc[c] += k * t;
+            }
+        }
+    }
+}
+
+template <int WC, class I>
+ISA_BODY void chebyshev_terms_w(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                                const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    for (int k = 2; k <= K; ++k) {
+        chebyshev_term<WC>(rows[k], w, ip, ix, px, off, C + k, K + 1, t1, t0, W);
+        std::swap(t0, t1);
+    }
+}
+
+template <class I>
+ISA_BODY void chebyshev_body(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                             const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    switch (w) {
+    case 32: chebyshev_terms_w<32>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+    case 16: chebyshev_terms_w<16>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+    case 8: chebyshev_terms_w<8>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+    case 4: chebyshev_terms_w<4>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+    default: chebyshev_terms_w<0>(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+    }
+}
+template <class I>
+ISA_AVX2 void chebyshev_avx2(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                             const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    chebyshev_body(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+}
+template <class I>
+ISA_BASELINE void chebyshev_baseline(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                                     const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    chebyshev_body(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+}
+
+using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using Coefs = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+
+// Checks everything the loops read, then runs them without the GIL.
+template <class I>
+void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
+                      In1<int64_t> rows, Block t1, Block t0, Block W) {
+    const int64_t n = int64_t(t1.shape(0)), w = int64_t(t1.shape(1)), nb_ = int64_t(offsets.shape(0)) - 1;
+    const int64_t K = int64_t(C.shape(1)) - 1;
+    if (nb_ < 0 || int64_t(C.shape(0)) != nb_) throw std::invalid_argument("C must have one row per block");
+    if (int64_t(rows.shape(0)) != K + 1) throw std::invalid_argument("rows must have one entry per term");
+    if (int64_t(t0.shape(0)) != n || int64_t(W.shape(0)) != n || int64_t(t0.shape(1)) != w || int64_t(W.shape(1)) != w)
+        throw std::invalid_argument("t1, t0 and W must have one shape");
+    if (w < 1 || w > (1 << 20) || K > (1 << 24)) throw std::invalid_argument("1 to 2**20 columns, at most 2**24 terms");
+    if (int64_t(indptr.shape(0)) != n + 1) throw std::invalid_argument("indptr must have n + 1 entries");
+    const int64_t *off = offsets.data(), *rw = rows.data();
+    if (off[0] != 0 || off[nb_] != n) throw std::invalid_argument("offsets must run from 0 to n");
+    for (int64_t b = 0; b < nb_; ++b)
+        if (off[b + 1] < off[b]) throw std::invalid_argument("offsets must not decrease");
+    for (int64_t k = 2; k <= K; ++k)
+        if (rw[k] < 0 || rw[k] > n) throw std::invalid_argument("rows must lie in [0, n]");
+    const I *ip = indptr.data(), *ix = indices.data();
+    if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0)) || int64_t(ip[n]) > int64_t(data.shape(0)))
+        throw std::invalid_argument("indptr does not fit indices and data");
+    for (int64_t i = 0; i < n; ++i)
+        if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
+    for (int64_t p = 0; p < int64_t(ip[n]); ++p)
+        if (ix[p] < 0 || int64_t(ix[p]) >= n) throw std::invalid_argument("indices out of range");
+    if (t1.data() == t0.data() || t1.data() == W.data() || t0.data() == W.data())
+        throw std::invalid_argument("t1, t0 and W must be distinct arrays");
+    if (K < 2) return;
+    nb::gil_scoped_release rel;
+    if (isa::avx2())
+        chebyshev_avx2<I>(int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(), t0.data(), W.data());
+    else
+        chebyshev_baseline<I>(int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(), t0.data(), W.data());
+}
+
 template <class T>
 void bind_factor(nb::module_ &mod, const char *name) {
     using FT = Factor<T>;
@@ -959,6 +1064,16 @@ NB_MODULE(_ldlt, mod) {
     mod.def("kernel_isa", [] { return isa::avx2() ? "avx2" : "baseline"; },
             "Instruction set of the kernels in use: 'avx2', or 'baseline' (no AVX2 on this CPU, "
             "another compiler, or SPECTRAL_IGL_BASELINE=1).");
+    mod.def("chebyshev_series", &chebyshev_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
+            nb::arg("W").noconvert(),
+            "Terms 2..K of a Chebyshev recurrence on a block-diagonal CSR P: at term k, on rows[:rows[k]], "
+            "t_k = P t_{k-1} - t_{k-2} (written over t_{k-2}; the two swap roles each term) and "
+            "W += C[block, k] t_k, rounded as the numpy form is (spectral_igl.approx.uniformization."
+            "chebyshev_blocks); t1 and t0 are left as scratch.");
+    mod.def("chebyshev_series", &chebyshev_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
+            nb::arg("W").noconvert());
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

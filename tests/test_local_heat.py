@@ -405,3 +405,79 @@ def test_sparse_heat_kernel_with_a_sliver_every_entry(name, t):
     assert np.all((exact <= info["dropped_max"][None, :] + slack)[~stored])
     assert np.all(lap.mass @ np.where(stored, 0.0, exact) <= info["dropped_mass"] + REFERENCE)
     assert np.all(info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass))
+
+
+def _numpy_series(P, offsets, C, rows, t1, t0, W):
+    """The numpy form of the Chebyshev terms 2..K that the compiled loop replaces."""
+    counts = np.diff(offsets)
+    for k in range(2, C.shape[1]):
+        r = rows[k]
+        q = P[:r, :r] @ t1[:r]
+        new = t0[:r]
+        np.subtract(q, new, out=new)
+        t0, t1 = t1, t0
+        W[:r] += np.repeat(C[:, k], counts)[:r, None] * new
+    return W
+
+
+@pytest.mark.parametrize("width", [32, 16, 5, 1])
+def test_compiled_chebyshev_series_rounds_as_numpy(width):
+    """The compiled recurrence agrees bit for bit with the numpy form whose rounding the
+    series' bound is proved for, on blocks that stop at their own terms (leading rows)."""
+    import scipy.sparse as sp
+
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    rng = np.random.default_rng(width)
+    sizes = [40, 25, 31]
+    blocks = [sp.random(s, s, density=0.2, random_state=rng) for s in sizes]
+    P = sp.csr_matrix(sp.block_diag([b + b.T - sp.diags(rng.uniform(0, 1, s)) for b, s in zip(blocks, sizes)]))
+    offsets = np.r_[0, np.cumsum(sizes)]
+    n, K = P.shape[0], 9
+    C = rng.standard_normal((len(sizes), K + 1))
+    rows = [0, 0] + [int(offsets[3 if k < 5 else 2 if k < 8 else 1]) for k in range(2, K + 1)]
+    t0, t1 = rng.standard_normal((n, width)), rng.standard_normal((n, width))
+    W = rng.standard_normal((n, width))
+    want = _numpy_series(P, offsets, C, rows, t1.copy(), t0.copy(), W.copy())
+    assert ldlt.chebyshev_series(P, offsets, C, rows, t1, t0, W)
+    assert np.array_equal(W, want)
+    with pytest.raises(ValueError, match="indices out of range"):
+        bad = P.copy()
+        bad.indices[3] = n
+        ldlt.chebyshev_series(bad, offsets, C, rows, t1, t0, W)
+    with pytest.raises(ValueError, match="rows must lie"):
+        ldlt.chebyshev_series(P, offsets, C, rows[:-1] + [n + 1], t1, t0, W)
+    with pytest.raises(ValueError, match="one shape"):
+        ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
+
+
+def test_sparse_heat_kernel_same_with_the_compiled_series(monkeypatch):
+    """sparse_heat_kernel gives the same matrix and bounds, bit for bit, with the compiled
+    series and with its numpy form (the path taken where the extension is missing)."""
+    from spectral_igl.approx import uniformization
+
+    lap = _exact("sliver")[0]
+    calls = []
+    compiled = uniformization.chebyshev_series
+    monkeypatch.setattr(uniformization, "chebyshev_series", lambda *a: calls.append(1) or compiled(*a))
+    K, info = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
+    assert calls                                 # the sliver's regions took the Chebyshev series
+    monkeypatch.setattr(uniformization, "chebyshev_series", lambda *a: False)
+    K2, info2 = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
+    assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
+
+
+def test_first_radii_are_first_radius_per_source():
+    """The radii of many sources at once are those of one source at a time, in the hop regime
+    (t short against the spacing), the Gaussian one, and for isolated vertices (spacing inf)."""
+    from spectral_igl.approx.region import first_radii, first_radius
+
+    rng = np.random.default_rng(3)
+    h2 = rng.uniform(1e-6, 1e-4, 400)
+    h2[::9] = np.inf
+    goal = 10.0 ** rng.uniform(-16, 0, 400)
+    for t in (1e-7, 6e-7, 1e-5):
+        want = [first_radius(t, float(a), float(g)) for a, g in zip(h2, goal)]
+        assert np.array_equal(first_radii(t, h2, goal), want)

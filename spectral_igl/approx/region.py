@@ -545,7 +545,8 @@ def first_radii(t: float, h2, goal) -> np.ndarray:
     hop = np.flatnonzero(4.25 * t / h2 < 0.2)
     if hop.size:
         hops = np.minimum(poisson_terms(t, 4.25 / h2[hop], np.minimum(goal[hop], 0.5)), 6)
-        radii[hop] = np.maximum(radii[hop], hops * np.sqrt(h2[hop]))
+        # (an isolated vertex's spacing is inf and its rate 0: no hops, and no 0 * inf)
+        radii[hop] = np.maximum(radii[hop], hops * np.sqrt(np.where(hops > 0, h2[hop], 0.0)))
     return radii
 
 

@@ -46,6 +46,7 @@ from scipy.special import gammaln
 
 from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 from ..filters import heat
+from ..linalg.ldlt import chebyshev_series
 from .polynomial import ChebyshevPlan
 
 __all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "abs_radius", "products_needed", "terms", "STEP", "TAIL",
@@ -584,16 +585,17 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
         t1 *= 0.5
         W += np.repeat(C[:, 1], counts)[:, None] * t1
         work += P.nnz
-    for k in range(2, K + 1):
-        rows, Pk = head(k)
-        q = Pk @ t1[:rows]
-        new = t0[:rows]
-        np.subtract(q, new, out=new)              # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
-        t0, t1 = t1, t0
-        np.multiply(new, np.repeat(C[:, k], counts)[:rows, None], out=q)
-        W[:rows] += q
-        work += Pk.nnz
-    del t0, t1
+    heads = [head(k) for k in range(2, K + 1)]
+    work += sum(Pk.nnz for _, Pk in heads)
+    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + [rows for rows, _ in heads], t1, t0, W)):
+        for k, (rows, Pk) in enumerate(heads, start=2):
+            q = Pk @ t1[:rows]
+            new = t0[:rows]
+            np.subtract(q, new, out=new)          # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
+            t0, t1 = t1, t0
+            np.multiply(new, np.repeat(C[:, k], counts)[:rows, None], out=q)
+            W[:rows] += q
+    del heads
     np.maximum(W, 0.0, out=W)
     _, r = _local_rounding(P)
     zeta = (r + 4) * float(np.finfo(float).smallest_subnormal) * np.sqrt(np.asarray(volume, float))

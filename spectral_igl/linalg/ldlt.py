@@ -25,7 +25,8 @@ import scipy.sparse as sp
 from .._extras import require
 from .threads import serial_blas
 
-__all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS"]
+__all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS",
+           "chebyshev_series"]
 
 ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
 
@@ -71,6 +72,25 @@ def available() -> bool:
         _ext()
     except ImportError:
         return False
+    return True
+
+
+def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W) -> bool:
+    """Terms 2..K of a Chebyshev recurrence on a block-diagonal P, in the compiled loop: at
+    term k, on the leading ``rows[k]`` rows, ``t_k = P t_{k-1} - t_{k-2}`` and
+    ``W += C[b, k] t_k`` (b the row's block, ``offsets`` the blocks' rows), rounded exactly as
+    the numpy form ``q = P @ t1; q - t0; W += c * t`` rounds it (no fused multiply-add), one pass
+    over each row instead of four. ``W`` is updated in place; ``t1`` and ``t0`` are scratch.
+    Returns False, having done nothing, when the extension is not available."""
+    try:
+        ext = _ext()
+    except ImportError:
+        return False
+    P = sp.csr_matrix(P)
+    index = np.int32 if P.indices.dtype == np.int32 and P.indptr.dtype == np.int32 else np.int64
+    ext.chebyshev_series(P.indptr.astype(index, copy=False), P.indices.astype(index, copy=False),
+                         np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
+                         np.ascontiguousarray(C, dtype=float), np.asarray(rows, dtype=np.int64), t1, t0, W)
     return True
 
 
