@@ -15,6 +15,7 @@
 #include <nanobind/stl/shared_ptr.h>
 
 #include <algorithm>
+#include <atomic>
 #include <complex>
 #include <exception>
 #include <cstdint>
@@ -22,6 +23,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -809,23 +811,25 @@ Out<T> to_numpy(std::vector<T> &&v, std::vector<size_t> shape) {
 // ------------------------------------------------------------------------- Chebyshev series
 // Terms 2..K of the Chebyshev recurrence of spectral_igl.approx.uniformization.chebyshev_blocks
 // on a block-diagonal CSR matrix P (n x n, its factor -2/sigma taken in) and row-major blocks
-// of w columns. At term k the leading rows[k] rows take one pass each:
+// of w columns. Term k runs on the blocks within the leading rows[k] rows:
 //     t_k = P t_{k-1} - t_{k-2} (in t_{k-2}'s place), W += C[b, k] t_k (b the row's block).
 // Every entry is rounded exactly as the numpy form (q = P @ t1, summed in stored order from
 // 0; q - t0; W += coef * t) rounds it, so the two agree bit for bit and the series' proved
 // rounding bound holds for both. No fused multiply-add: the AVX2 clone is compiled without
-// FMA, and the baseline has none.
+// FMA, and the baseline has none. The blocks are independent, so each runs all its terms
+// while its rows are in cache, and threads take whole blocks from a shared counter: no
+// barrier, and the result does not depend on the number of threads.
 template <int WC, class I>
-ISA_BODY void chebyshev_term(int64_t rows, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
-                             const double *Ck, int64_t stride, const double *t1, double *t0, double *W) {
+ISA_BODY void chebyshev_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                              const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
     const int width = WC > 0 ? WC : w;
     double qbuf[WC > 0 ? WC : 1];
     std::vector<double> qvec(WC > 0 ? 0 : size_t(width));
     double *q = WC > 0 ? qbuf : qvec.data();
-    for (int64_t b = 0; off[b] < rows; ++b) {
-        const double k = Ck[b * stride];
-        const int64_t end = std::min(off[b + 1], rows);
-        for (int64_t i = off[b]; i < end; ++i) {
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int k = 2; k <= K && rows[k] >= hi; ++k) {
+        const double ck = C[b * (K + 1) + k];
+        for (int64_t i = lo; i < hi; ++i) {
             for (int c = 0; c < width; ++c) q[c] = 0.0;
             for (I p = ip[i]; p < ip[i + 1]; ++p) {
                 const double a = px[p];
@@ -836,79 +840,92 @@ ISA_BODY void chebyshev_term(int64_t rows, int w, const I *ip, const I *ix, cons
             for (int c = 0; c < width; ++c) {
                 const double t = q[c] - y[c];
                 y[c] = t;
-                acc[c] += k * t;
+                acc[c] += ck * t;
             }
         }
-    }
-}
-
-template <int WC, class I>
-ISA_BODY void chebyshev_terms_w(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
-                                const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
-    for (int k = 2; k <= K; ++k) {
-        chebyshev_term<WC>(rows[k], w, ip, ix, px, off, C + k, K + 1, t1, t0, W);
         std::swap(t0, t1);
     }
 }
 
 template <class I>
-ISA_BODY void chebyshev_body(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
-                             const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
-    switch (w) {
-    case 32: chebyshev_terms_w<32>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-    case 16: chebyshev_terms_w<16>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-    case 8: chebyshev_terms_w<8>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-    case 4: chebyshev_terms_w<4>(K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-    default: chebyshev_terms_w<0>(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+ISA_BODY void chebyshev_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
+                             double *t0, double *W) {
+    for (int64_t b = next++; b < nblocks; b = next++) {
+        switch (w) {
+        case 32: chebyshev_block<32>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 16: chebyshev_block<16>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 8: chebyshev_block<8>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 4: chebyshev_block<4>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        default: chebyshev_block<0>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W);
+        }
     }
 }
 template <class I>
-ISA_AVX2 void chebyshev_avx2(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
-                             const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
-    chebyshev_body(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+ISA_AVX2 void chebyshev_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
+                             double *t0, double *W) {
+    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
 }
 template <class I>
-ISA_BASELINE void chebyshev_baseline(int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
-                                     const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
-    chebyshev_body(K, w, ip, ix, px, off, C, rows, t1, t0, W);
+ISA_BASELINE void chebyshev_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
+                                     const I *ix, const double *px, const int64_t *off, const double *C,
+                                     const int64_t *rows, double *t1, double *t0, double *W) {
+    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
 }
 
 using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using Coefs = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 
-// Checks everything the loops read, then runs them without the GIL.
+// Checks everything the loops read (P block diagonal on the offsets, rows[k] block
+// boundaries that never grow), then runs them without the GIL on `threads` threads.
 template <class I>
 void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
-                      In1<int64_t> rows, Block t1, Block t0, Block W) {
-    const int64_t n = int64_t(t1.shape(0)), w = int64_t(t1.shape(1)), nb_ = int64_t(offsets.shape(0)) - 1;
+                      In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
+    const int64_t n = int64_t(t1.shape(0)), w = int64_t(t1.shape(1)), nblocks = int64_t(offsets.shape(0)) - 1;
     const int64_t K = int64_t(C.shape(1)) - 1;
-    if (nb_ < 0 || int64_t(C.shape(0)) != nb_) throw std::invalid_argument("C must have one row per block");
+    if (nblocks < 0 || int64_t(C.shape(0)) != nblocks) throw std::invalid_argument("C must have one row per block");
     if (int64_t(rows.shape(0)) != K + 1) throw std::invalid_argument("rows must have one entry per term");
     if (int64_t(t0.shape(0)) != n || int64_t(W.shape(0)) != n || int64_t(t0.shape(1)) != w || int64_t(W.shape(1)) != w)
         throw std::invalid_argument("t1, t0 and W must have one shape");
     if (w < 1 || w > (1 << 20) || K > (1 << 24)) throw std::invalid_argument("1 to 2**20 columns, at most 2**24 terms");
+    if (threads < 1) throw std::invalid_argument("threads must be at least 1");
     if (int64_t(indptr.shape(0)) != n + 1) throw std::invalid_argument("indptr must have n + 1 entries");
     const int64_t *off = offsets.data(), *rw = rows.data();
-    if (off[0] != 0 || off[nb_] != n) throw std::invalid_argument("offsets must run from 0 to n");
-    for (int64_t b = 0; b < nb_; ++b)
+    if (off[0] != 0 || off[nblocks] != n) throw std::invalid_argument("offsets must run from 0 to n");
+    for (int64_t b = 0; b < nblocks; ++b)
         if (off[b + 1] < off[b]) throw std::invalid_argument("offsets must not decrease");
     for (int64_t k = 2; k <= K; ++k)
-        if (rw[k] < 0 || rw[k] > n) throw std::invalid_argument("rows must lie in [0, n]");
+        if (rw[k] < 0 || rw[k] > n || (k > 2 && rw[k] > rw[k - 1]) || !std::binary_search(off, off + nblocks + 1, rw[k]))
+            throw std::invalid_argument("rows must be block boundaries that never grow");
     const I *ip = indptr.data(), *ix = indices.data();
     if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0)) || int64_t(ip[n]) > int64_t(data.shape(0)))
         throw std::invalid_argument("indptr does not fit indices and data");
-    for (int64_t i = 0; i < n; ++i)
-        if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
-    for (int64_t p = 0; p < int64_t(ip[n]); ++p)
-        if (ix[p] < 0 || int64_t(ix[p]) >= n) throw std::invalid_argument("indices out of range");
+    for (int64_t b = 0; b < nblocks; ++b)
+        for (int64_t i = off[b]; i < off[b + 1]; ++i) {
+            if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
+            for (I p = ip[i]; p < ip[i + 1]; ++p)
+                if (int64_t(ix[p]) < off[b] || int64_t(ix[p]) >= off[b + 1])
+                    throw std::invalid_argument("indices out of range: P must be block diagonal on the offsets");
+        }
     if (t1.data() == t0.data() || t1.data() == W.data() || t0.data() == W.data())
         throw std::invalid_argument("t1, t0 and W must be distinct arrays");
     if (K < 2) return;
     nb::gil_scoped_release rel;
-    if (isa::avx2())
-        chebyshev_avx2<I>(int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(), t0.data(), W.data());
-    else
-        chebyshev_baseline<I>(int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(), t0.data(), W.data());
+    std::atomic<int64_t> next(0);
+    auto run = [&] {
+        if (isa::avx2())
+            chebyshev_avx2<I>(next, nblocks, int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(),
+                              t0.data(), W.data());
+        else
+            chebyshev_baseline<I>(next, nblocks, int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(),
+                                  t0.data(), W.data());
+    };
+    std::vector<std::thread> pool;
+    const int extra = int(std::min<int64_t>(threads, nblocks)) - 1;
+    for (int j = 0; j < extra; ++j) pool.emplace_back(run);
+    run();
+    for (auto &th : pool) th.join();
 }
 
 template <class T>
@@ -1066,14 +1083,15 @@ NB_MODULE(_ldlt, mod) {
             "another compiler, or SPECTRAL_IGL_BASELINE=1).");
     mod.def("chebyshev_series", &chebyshev_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
-            nb::arg("W").noconvert(),
-            "Terms 2..K of a Chebyshev recurrence on a block-diagonal CSR P: at term k, on rows[:rows[k]], "
+            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            "Terms 2..K of a Chebyshev recurrence on a block-diagonal CSR P: at term k, on the blocks in rows[:rows[k]], "
             "t_k = P t_{k-1} - t_{k-2} (written over t_{k-2}; the two swap roles each term) and "
             "W += C[block, k] t_k, rounded as the numpy form is (spectral_igl.approx.uniformization."
-            "chebyshev_blocks); t1 and t0 are left as scratch.");
+            "chebyshev_blocks); t1 and t0 are left as scratch. Blocks go to `threads` threads; the result "
+            "does not depend on their number.");
     mod.def("chebyshev_series", &chebyshev_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
-            nb::arg("W").noconvert());
+            nb::arg("W").noconvert(), nb::arg("threads") = 1);
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

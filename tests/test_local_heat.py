@@ -441,14 +441,20 @@ def test_compiled_chebyshev_series_rounds_as_numpy(width):
     t0, t1 = rng.standard_normal((n, width)), rng.standard_normal((n, width))
     W = rng.standard_normal((n, width))
     want = _numpy_series(P, offsets, C, rows, t1.copy(), t0.copy(), W.copy())
-    assert ldlt.chebyshev_series(P, offsets, C, rows, t1, t0, W)
-    assert np.array_equal(W, want)
+    for threads in (1, 2, 5):
+        got = W.copy()
+        assert ldlt.chebyshev_series(P, offsets, C, rows, t1.copy(), t0.copy(), got, threads=threads)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="block diagonal"):
+        coupled = P.tolil()
+        coupled[0, offsets[1]] = 1.0
+        ldlt.chebyshev_series(coupled.tocsr(), offsets, C, rows, t1, t0, W)
+    with pytest.raises(ValueError, match="block boundaries"):
+        ldlt.chebyshev_series(P, offsets, C, rows[:-1] + [offsets[1] + 1], t1, t0, W)
     with pytest.raises(ValueError, match="indices out of range"):
         bad = P.copy()
         bad.indices[3] = n
         ldlt.chebyshev_series(bad, offsets, C, rows, t1, t0, W)
-    with pytest.raises(ValueError, match="rows must lie"):
-        ldlt.chebyshev_series(P, offsets, C, rows[:-1] + [n + 1], t1, t0, W)
     with pytest.raises(ValueError, match="one shape"):
         ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
 

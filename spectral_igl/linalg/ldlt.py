@@ -18,6 +18,7 @@ Laplacian).
 from __future__ import annotations
 
 import importlib.util
+import os
 
 import numpy as np
 import scipy.sparse as sp
@@ -75,12 +76,15 @@ def available() -> bool:
     return True
 
 
-def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W) -> bool:
+def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W, threads: int | None = None) -> bool:
     """Terms 2..K of a Chebyshev recurrence on a block-diagonal P, in the compiled loop: at
     term k, on the leading ``rows[k]`` rows, ``t_k = P t_{k-1} - t_{k-2}`` and
     ``W += C[b, k] t_k`` (b the row's block, ``offsets`` the blocks' rows), rounded exactly as
     the numpy form ``q = P @ t1; q - t0; W += c * t`` rounds it (no fused multiply-add), one pass
-    over each row instead of four. ``W`` is updated in place; ``t1`` and ``t0`` are scratch.
+    over each row instead of four; ``rows[k]`` are block boundaries that never grow. ``W`` is
+    updated in place; ``t1`` and ``t0`` are scratch. Each block runs all its terms at once, on
+    one of ``threads`` threads (default: the cores this process may use) that take whole blocks
+    in turn: no thread waits for another, and the result does not depend on their number.
     Returns False, having done nothing, when the extension is not available."""
     try:
         ext = _ext()
@@ -90,8 +94,17 @@ def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W) -> bool:
     index = np.int32 if P.indices.dtype == np.int32 and P.indptr.dtype == np.int32 else np.int64
     ext.chebyshev_series(P.indptr.astype(index, copy=False), P.indices.astype(index, copy=False),
                          np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
-                         np.ascontiguousarray(C, dtype=float), np.asarray(rows, dtype=np.int64), t1, t0, W)
+                         np.ascontiguousarray(C, dtype=float), np.asarray(rows, dtype=np.int64), t1, t0, W,
+                         usable_cores() if threads is None else threads)
     return True
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the system tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:         # pragma: no cover - no affinity on this system
+        return max(1, os.cpu_count() or 1)
 
 
 def has_metis() -> bool:
