@@ -874,20 +874,83 @@ ISA_BASELINE void chebyshev_baseline(std::atomic<int64_t> &next, int64_t nblocks
     chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
 }
 
+// The Poisson (uniformization) series of spectral_igl.approx.uniformization.uniformize_blocks
+// on the same block-diagonal P: for block b and terms k = 1..K (while rows[k] covers the
+// block), q_k = (P q_{k-1}) * (lam[b] / k) and W += q_k, with q_0 = W's block on entry
+// (scaled by the caller); rounded as the numpy form (q = P @ q; q *= lam / k; W += q) is.
+// q and s are scratch rows of the block's size.
+template <int WC, class I>
+ISA_BODY void poisson_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                            const double *lam, const int64_t *rows, double *q, double *s, double *W) {
+    const int width = WC > 0 ? WC : w;
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int64_t i = lo; i < hi; ++i)
+        for (int c = 0; c < width; ++c) q[i * width + c] = W[i * width + c];
+    for (int k = 1; k <= K && rows[k] >= hi; ++k) {
+        const double ck = lam[b] / double(k);
+        for (int64_t i = lo; i < hi; ++i) {
+            double *y = s + i * width;
+            for (int c = 0; c < width; ++c) y[c] = 0.0;
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const double *x = q + int64_t(ix[p]) * width;
+                for (int c = 0; c < width; ++c) y[c] += a * x[c];
+            }
+            double *acc = W + i * width;
+            for (int c = 0; c < width; ++c) {
+                y[c] *= ck;
+                acc[c] += y[c];
+            }
+        }
+        std::swap(q, s);
+    }
+}
+
+template <class I>
+ISA_BODY void poisson_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
+                           double *s, double *W) {
+    for (int64_t b = next++; b < nblocks; b = next++) {
+        switch (w) {
+        case 32: poisson_block<32>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        case 16: poisson_block<16>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        case 8: poisson_block<8>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        default: poisson_block<0>(b, K, w, ip, ix, px, off, lam, rows, q, s, W);
+        }
+    }
+}
+template <class I>
+ISA_AVX2 void poisson_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
+                           double *s, double *W) {
+    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+}
+template <class I>
+ISA_BASELINE void poisson_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
+                                   const I *ix, const double *px, const int64_t *off, const double *lam,
+                                   const int64_t *rows, double *q, double *s, double *W) {
+    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+}
+
 using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using Coefs = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 
-// Checks everything the loops read (P block diagonal on the offsets, rows[k] block
-// boundaries that never grow), then runs them without the GIL on `threads` threads.
+// Checks everything the series' loops read: P (n x n CSR) block diagonal on the offsets, rows
+// (K + 1 entries) block boundaries that never grow from term `first` on, the blocks of n rows
+// and w columns distinct.
 template <class I>
-void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
-                      In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
-    const int64_t n = int64_t(t1.shape(0)), w = int64_t(t1.shape(1)), nblocks = int64_t(offsets.shape(0)) - 1;
-    const int64_t K = int64_t(C.shape(1)) - 1;
-    if (nblocks < 0 || int64_t(C.shape(0)) != nblocks) throw std::invalid_argument("C must have one row per block");
+void check_series(const In1<I> &indptr, const In1<I> &indices, const In1<double> &data, const In1<int64_t> &offsets,
+                  const In1<int64_t> &rows, int64_t K, int first, const std::vector<const Block *> &blocks, int threads) {
+    const int64_t n = int64_t(blocks[0]->shape(0)), w = int64_t(blocks[0]->shape(1));
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1;
+    if (nblocks < 0) throw std::invalid_argument("offsets must have at least one entry");
     if (int64_t(rows.shape(0)) != K + 1) throw std::invalid_argument("rows must have one entry per term");
-    if (int64_t(t0.shape(0)) != n || int64_t(W.shape(0)) != n || int64_t(t0.shape(1)) != w || int64_t(W.shape(1)) != w)
-        throw std::invalid_argument("t1, t0 and W must have one shape");
+    for (const Block *B : blocks)
+        if (int64_t(B->shape(0)) != n || int64_t(B->shape(1)) != w)
+            throw std::invalid_argument("the dense blocks must have one shape");
+    for (size_t a = 0; a < blocks.size(); ++a)
+        for (size_t c = a + 1; c < blocks.size(); ++c)
+            if (blocks[a]->data() == blocks[c]->data()) throw std::invalid_argument("the dense blocks must be distinct arrays");
     if (w < 1 || w > (1 << 20) || K > (1 << 24)) throw std::invalid_argument("1 to 2**20 columns, at most 2**24 terms");
     if (threads < 1) throw std::invalid_argument("threads must be at least 1");
     if (int64_t(indptr.shape(0)) != n + 1) throw std::invalid_argument("indptr must have n + 1 entries");
@@ -895,8 +958,9 @@ void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64
     if (off[0] != 0 || off[nblocks] != n) throw std::invalid_argument("offsets must run from 0 to n");
     for (int64_t b = 0; b < nblocks; ++b)
         if (off[b + 1] < off[b]) throw std::invalid_argument("offsets must not decrease");
-    for (int64_t k = 2; k <= K; ++k)
-        if (rw[k] < 0 || rw[k] > n || (k > 2 && rw[k] > rw[k - 1]) || !std::binary_search(off, off + nblocks + 1, rw[k]))
+    for (int64_t k = first; k <= K; ++k)
+        if (rw[k] < 0 || rw[k] > n || (k > first && rw[k] > rw[k - 1]) ||
+            !std::binary_search(off, off + nblocks + 1, rw[k]))
             throw std::invalid_argument("rows must be block boundaries that never grow");
     const I *ip = indptr.data(), *ix = indices.data();
     if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0)) || int64_t(ip[n]) > int64_t(data.shape(0)))
@@ -908,24 +972,53 @@ void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64
                 if (int64_t(ix[p]) < off[b] || int64_t(ix[p]) >= off[b + 1])
                     throw std::invalid_argument("indices out of range: P must be block diagonal on the offsets");
         }
-    if (t1.data() == t0.data() || t1.data() == W.data() || t0.data() == W.data())
-        throw std::invalid_argument("t1, t0 and W must be distinct arrays");
-    if (K < 2) return;
+}
+
+// Runs body(next) on `threads` threads (at most one per block) without the GIL.
+template <class F>
+void on_threads(int threads, int64_t nblocks, F body) {
     nb::gil_scoped_release rel;
     std::atomic<int64_t> next(0);
-    auto run = [&] {
-        if (isa::avx2())
-            chebyshev_avx2<I>(next, nblocks, int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(),
-                              t0.data(), W.data());
-        else
-            chebyshev_baseline<I>(next, nblocks, int(K), int(w), ip, ix, data.data(), off, C.data(), rw, t1.data(),
-                                  t0.data(), W.data());
-    };
     std::vector<std::thread> pool;
     const int extra = int(std::min<int64_t>(threads, nblocks)) - 1;
-    for (int j = 0; j < extra; ++j) pool.emplace_back(run);
-    run();
+    for (int j = 0; j < extra; ++j) pool.emplace_back([&] { body(next); });
+    body(next);
     for (auto &th : pool) th.join();
+}
+
+template <class I>
+void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
+                      In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(C.shape(1)) - 1;
+    if (int64_t(C.shape(0)) != nblocks) throw std::invalid_argument("C must have one row per block");
+    check_series<I>(indptr, indices, data, offsets, rows, K, 2, {&t1, &t0, &W}, threads);
+    if (K < 2) return;
+    const int w = int(t1.shape(1));
+    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
+        if (isa::avx2())
+            chebyshev_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                              C.data(), rows.data(), t1.data(), t0.data(), W.data());
+        else
+            chebyshev_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                                  C.data(), rows.data(), t1.data(), t0.data(), W.data());
+    });
+}
+
+template <class I>
+void poisson_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, In1<double> lam,
+                    In1<int64_t> rows, Block q, Block s, Block W, int threads) {
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(rows.shape(0)) - 1;
+    if (int64_t(lam.shape(0)) != nblocks) throw std::invalid_argument("lam must have one entry per block");
+    check_series<I>(indptr, indices, data, offsets, rows, K, 1, {&q, &s, &W}, threads);
+    const int w = int(q.shape(1));
+    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
+        if (isa::avx2())
+            poisson_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                            lam.data(), rows.data(), q.data(), s.data(), W.data());
+        else
+            poisson_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                                lam.data(), rows.data(), q.data(), s.data(), W.data());
+    });
 }
 
 template <class T>
@@ -1091,6 +1184,16 @@ NB_MODULE(_ldlt, mod) {
             "does not depend on their number.");
     mod.def("chebyshev_series", &chebyshev_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1);
+    mod.def("poisson_series", &poisson_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            "Terms 1..K of a Poisson series on a block-diagonal CSR P, from W's blocks: on the blocks in "
+            "rows[:rows[k]], q_k = (P q_{k-1}) * (lam[block] / k) and W += q_k, rounded as the numpy form is "
+            "(spectral_igl.approx.uniformization.uniformize_blocks); q and s are scratch. Blocks go to `threads` "
+            "threads; the result does not depend on their number.");
+    mod.def("poisson_series", &poisson_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
             nb::arg("W").noconvert(), nb::arg("threads") = 1);
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");

@@ -459,18 +459,53 @@ def test_compiled_chebyshev_series_rounds_as_numpy(width):
         ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
 
 
+@pytest.mark.parametrize("width", [32, 16, 3])
+def test_compiled_poisson_series_rounds_as_numpy(width):
+    """The compiled uniformization terms agree bit for bit with their numpy form, for any
+    number of threads, on blocks that stop at their own terms."""
+    import scipy.sparse as sp
+
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    rng = np.random.default_rng(10 + width)
+    sizes = [30, 45, 20, 12]
+    P = sp.csr_matrix(sp.block_diag([sp.random(s, s, density=0.25, random_state=rng) + sp.eye(s) for s in sizes]))
+    offsets = np.r_[0, np.cumsum(sizes)]
+    lam = rng.uniform(0.5, 3.0, len(sizes))
+    K = 12
+    rows = [0] + [int(offsets[4 if k < 6 else 2 if k < 10 else 1]) for k in range(1, K + 1)]
+    W0 = rng.uniform(0, 1, (P.shape[0], width))
+    want, q = W0.copy(), W0.copy()
+    lam_rows = np.repeat(lam, sizes)[:, None]
+    for k in range(1, K + 1):
+        q = P[:rows[k], :rows[k]] @ q[:rows[k]]
+        q *= lam_rows[:rows[k]] / k
+        want[:rows[k]] += q
+    for threads in (1, 2, 7):
+        got = W0.copy()
+        assert ldlt.poisson_series(P, offsets, lam, rows, got, threads=threads)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="one entry per block"):
+        ldlt.poisson_series(P, offsets, lam[:-1], rows, W0.copy())
+
+
 def test_sparse_heat_kernel_same_with_the_compiled_series(monkeypatch):
     """sparse_heat_kernel gives the same matrix and bounds, bit for bit, with the compiled
-    series and with its numpy form (the path taken where the extension is missing)."""
+    series and with their numpy forms (the path taken where the extension is missing)."""
     from spectral_igl.approx import uniformization
 
     lap = _exact("sliver")[0]
     calls = []
-    compiled = uniformization.chebyshev_series
-    monkeypatch.setattr(uniformization, "chebyshev_series", lambda *a: calls.append(1) or compiled(*a))
+    for name in ("chebyshev_series", "poisson_series"):
+        compiled = getattr(uniformization, name)
+        monkeypatch.setattr(uniformization, name, lambda *a, f=compiled, name=name: calls.append(name) or f(*a))
     K, info = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
-    assert calls                                 # the sliver's regions took the Chebyshev series
+    # the sliver's regions took the Chebyshev series, the others uniformization
+    assert set(calls) == {"chebyshev_series", "poisson_series"}
     monkeypatch.setattr(uniformization, "chebyshev_series", lambda *a: False)
+    monkeypatch.setattr(uniformization, "poisson_series", lambda *a: False)
     K2, info2 = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
     assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
 

@@ -46,7 +46,7 @@ from scipy.special import gammaln
 
 from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 from ..filters import heat
-from ..linalg.ldlt import chebyshev_series
+from ..linalg.ldlt import chebyshev_series, poisson_series
 from .polynomial import ChebyshevPlan
 
 __all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "abs_radius", "products_needed", "terms", "STEP", "TAIL",
@@ -367,19 +367,20 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     head = _leading(P, offsets, need)
 
     V = G.copy()
-    work = 0
+    heads = [head(k) for k in range(1, K + 1)]
+    work = s * sum(Pk.nnz for _, Pk in heads)
     for _ in range(s):
         # term k, c_k P^k V with c_k = e^-lam lam^k / k!, as (lam / k) P (term k - 1): the same
         # roundings as the coefficient and the products formed apart (module notes)
         q = V * (float(math.exp(-lams[0])) if single else
                  np.repeat([math.exp(-x) for x in lams], counts)[:, None])
-        W = q.copy()
-        for k in range(1, K + 1):
-            rows, Pk = head(k)
-            q = Pk @ q[:rows]
-            q *= lam_rows / k if single else lam_rows[:rows] / k
-            W[:rows] += q
-            work += Pk.nnz
+        W = np.ascontiguousarray(q)
+        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + [rows for rows, _ in heads], W)):
+            W = q.copy()
+            for k, (rows, Pk) in enumerate(heads, start=1):
+                q = Pk @ q[:rows]
+                q *= lam_rows / k if single else lam_rows[:rows] / k
+                W[:rows] += q
         V = W
     # each step's relative rounding (module notes), with K terms for every block
     eps1 = 33.0 * U + _gamma(r) * (1.0 + 33.0 * U)

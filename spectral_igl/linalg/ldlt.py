@@ -27,7 +27,7 @@ from .._extras import require
 from .threads import serial_blas
 
 __all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS",
-           "chebyshev_series"]
+           "chebyshev_series", "poisson_series", "usable_cores"]
 
 ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
 
@@ -96,6 +96,26 @@ def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W, threads: int
                          np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
                          np.ascontiguousarray(C, dtype=float), np.asarray(rows, dtype=np.int64), t1, t0, W,
                          usable_cores() if threads is None else threads)
+    return True
+
+
+def poisson_series(P: sp.csr_matrix, offsets, lam, rows, W, threads: int | None = None) -> bool:
+    """Terms 1..K of a Poisson series on a block-diagonal P, in the compiled loop, from W's
+    blocks q_0: at term k, on the blocks within the leading ``rows[k]`` rows,
+    ``q_k = (P q_{k-1}) * (lam[b] / k)`` and ``W += q_k``, rounded exactly as the numpy form
+    ``q = P @ q; q *= lam / k; W += q`` rounds it, one pass over each row, each block's terms at
+    once on one of ``threads`` threads (as :func:`chebyshev_series`). Returns False, having done
+    nothing, when the extension is not available."""
+    try:
+        ext = _ext()
+    except ImportError:
+        return False
+    P = sp.csr_matrix(P)
+    index = np.int32 if P.indices.dtype == np.int32 and P.indptr.dtype == np.int32 else np.int64
+    ext.poisson_series(P.indptr.astype(index, copy=False), P.indices.astype(index, copy=False),
+                       np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
+                       np.ascontiguousarray(lam, dtype=float), np.asarray(rows, dtype=np.int64),
+                       np.empty_like(W), np.empty_like(W), W, usable_cores() if threads is None else threads)
     return True
 
 
