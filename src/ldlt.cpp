@@ -15,6 +15,7 @@
 #include <nanobind/stl/shared_ptr.h>
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <complex>
 #include <exception>
@@ -1021,6 +1022,82 @@ void poisson_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t
     });
 }
 
+// ------------------------------------------------------------------------- regions
+// spectral_igl.approx.region.grow_regions: for each group b of sources, the vertices within
+// radii[b] of them along the edges of a symmetric CSR pattern, edge (i, j) of length
+// sqrt(0.5 (h2[i] + h2[j])), found ring by ring (a vertex's distance through the ring before
+// it, the smallest over its edges from that ring); a group whose region passes limits[b]
+// vertices takes its source's whole component (labels) instead. Every distance is rounded as
+// the numpy form rounds it, so both give the same regions. Returns the sorted keys
+// b * n + vertex and the regions' offsets.
+template <class I>
+nb::tuple grow_regions(In1<I> indptr, In1<I> indices, In1<double> h2, In1<int64_t> sources, In1<int64_t> offsets,
+                       In1<double> radii, In1<int64_t> limits, In1<int64_t> labels) {
+    const int64_t n = int64_t(h2.shape(0)), groups = int64_t(offsets.shape(0)) - 1;
+    if (groups < 0 || int64_t(radii.shape(0)) != groups || int64_t(limits.shape(0)) != groups)
+        throw std::invalid_argument("radii and limits must have one entry per group");
+    if (int64_t(indptr.shape(0)) != n + 1 || int64_t(labels.shape(0)) != n)
+        throw std::invalid_argument("indptr must have n + 1 entries and labels n");
+    const I *ip = indptr.data(), *ix = indices.data();
+    const int64_t *off = offsets.data(), *src = sources.data(), *lab = labels.data();
+    if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0))) throw std::invalid_argument("indptr does not fit indices");
+    for (int64_t i = 0; i < n; ++i)
+        if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
+    for (int64_t p = 0; p < int64_t(ip[n]); ++p)
+        if (ix[p] < 0 || int64_t(ix[p]) >= n) throw std::invalid_argument("indices out of range");
+    if (off[0] != 0 || off[groups] != int64_t(sources.shape(0))) throw std::invalid_argument("offsets must run over the sources");
+    for (int64_t b = 0; b < groups; ++b)
+        if (off[b + 1] <= off[b]) throw std::invalid_argument("every group must hold a source");
+    for (int64_t q = 0; q < int64_t(sources.shape(0)); ++q)
+        if (src[q] < 0 || src[q] >= n) throw std::invalid_argument("sources out of range");
+    std::vector<int64_t> keys, roff(size_t(groups) + 1, 0);
+    {
+        nb::gil_scoped_release rel;
+        const double *hh = h2.data(), *rad = radii.data();
+        const size_t nn = static_cast<size_t>(n);
+        std::vector<int64_t> seen(nn, -1), ring(nn, -1);
+        std::vector<double> dist(nn), cand(nn);
+        std::vector<int64_t> region, front, next, found;
+        int64_t stamp = 0;
+        for (int64_t b = 0; b < groups; ++b) {
+            region.assign(src + off[b], src + off[b + 1]);
+            std::sort(region.begin(), region.end());
+            region.erase(std::unique(region.begin(), region.end()), region.end());
+            for (int64_t v : region) seen[v] = b, dist[v] = 0.0;
+            front = region;
+            bool over = int64_t(region.size()) > limits.data()[b];
+            while (!front.empty() && !over) {
+                ++stamp;
+                found.clear();
+                for (int64_t v : front)
+                    for (I p = ip[v]; p < ip[v + 1]; ++p) {
+                        const int64_t j = ix[p];
+                        if (seen[j] == b) continue;
+                        const double d = dist[v] + std::sqrt(0.5 * (hh[v] + hh[j]));
+                        if (ring[j] != stamp) ring[j] = stamp, cand[j] = d, found.push_back(j);
+                        else if (d < cand[j]) cand[j] = d;
+                    }
+                next.clear();
+                for (int64_t j : found)
+                    if (cand[j] <= rad[b]) seen[j] = b, dist[j] = cand[j], next.push_back(j), region.push_back(j);
+                front.swap(next);
+                over = int64_t(region.size()) > limits.data()[b];
+            }
+            if (over) {
+                region.clear();
+                const int64_t c = lab[src[off[b]]];
+                for (int64_t v = 0; v < n; ++v)
+                    if (lab[v] == c) region.push_back(v);
+            }
+            std::sort(region.begin(), region.end());
+            for (int64_t v : region) keys.push_back(b * n + v);
+            roff[size_t(b) + 1] = int64_t(keys.size());
+        }
+    }
+    const size_t k = keys.size(), g = roff.size();
+    return nb::make_tuple(to_numpy<int64_t>(std::move(keys), {k}), to_numpy<int64_t>(std::move(roff), {g}));
+}
+
 template <class T>
 void bind_factor(nb::module_ &mod, const char *name) {
     using FT = Factor<T>;
@@ -1195,6 +1272,11 @@ NB_MODULE(_ldlt, mod) {
     mod.def("poisson_series", &poisson_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
             nb::arg("W").noconvert(), nb::arg("threads") = 1);
+    mod.def("grow_regions", &grow_regions<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("h2"),
+            nb::arg("sources"), nb::arg("offsets"), nb::arg("radii"), nb::arg("limits"), nb::arg("labels"),
+            "(keys, region offsets) of spectral_igl.approx.region.grow_regions, group by group.");
+    mod.def("grow_regions", &grow_regions<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("h2"),
+            nb::arg("sources"), nb::arg("offsets"), nb::arg("radii"), nb::arg("limits"), nb::arg("labels"));
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

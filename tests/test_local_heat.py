@@ -522,3 +522,35 @@ def test_first_radii_are_first_radius_per_source():
     for t in (1e-7, 6e-7, 1e-5):
         want = [first_radius(t, float(a), float(g)) for a, g in zip(h2, goal)]
         assert np.array_equal(first_radii(t, h2, goal), want)
+
+
+@pytest.mark.parametrize("name", ["grid", "two", "sliver"])
+def test_compiled_regions_are_the_numpy_regions(name, monkeypatch):
+    """grow_regions gives the same keys in the compiled loop as in its numpy form, with groups
+    that stop at their radius and groups that pass their limit (whole component)."""
+    import scipy.sparse as sp
+
+    from spectral_igl.approx import region
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    lap = _exact(name)[0]
+    L, h2, labels = sp.csr_matrix(lap.L), region.vertex_spacing(lap), lap.components
+    rng = np.random.default_rng(5)
+    sizes = [3, 1, 6, 10, 1, 19]
+    # each group's sources in one component (that of its first)
+    groups = []
+    for size in sizes:
+        first = rng.integers(lap.n)
+        same = np.flatnonzero(labels == labels[first])
+        groups.append(np.r_[first, rng.choice(same, size - 1)])
+    sources, offsets = np.concatenate(groups), np.r_[0, np.cumsum(sizes)]
+    radii = rng.uniform(0.01, 0.3, len(sizes))
+    limits = np.array([lap.n, 10, lap.n, 5, lap.n, lap.n])
+    got = region.grow_regions(L, h2, sources, offsets, radii, limits, labels)
+    monkeypatch.setattr(region, "region_keys", lambda *a: None)
+    want = region.grow_regions(L, h2, sources, offsets, radii, limits, labels)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+    whole = np.bincount(labels)[labels[sources[offsets[:-1]]]]
+    assert np.any(np.diff(got[1]) == whole) and np.any(np.diff(got[1]) < whole)

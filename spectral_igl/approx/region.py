@@ -48,6 +48,7 @@ import scipy.sparse as sp
 
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
+from ..linalg.ldlt import region_keys
 from .uniformization import (abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
                              spectral_top, terms, uniformize, uniformize_blocks)
 
@@ -188,6 +189,9 @@ def grow_regions(L, h2, sources, offsets, radii, limits, labels):
     region_offsets : (g + 1,) int
         Group b's region is ``keys[region_offsets[b]:region_offsets[b+1]] % n``.
     """
+    compiled = region_keys(L, h2, sources, offsets, radii, limits, labels)
+    if compiled is not None:
+        return compiled
     n = L.shape[0]
     count = len(offsets) - 1
     group = np.repeat(np.arange(count, dtype=np.int64), np.diff(offsets))
