@@ -16,6 +16,8 @@
 #include <nanobind/stl/string.h>
 
 #include <algorithm>
+#include <cmath>
+#include <atomic>
 #include <complex>
 #include <exception>
 #include <cstdint>
@@ -23,6 +25,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -856,6 +859,295 @@ Out<T> to_numpy(std::vector<T> &&v, std::vector<size_t> shape) {
     return Out<T>(buf->data(), shape.size(), shape.data(), owner);
 }
 
+// ------------------------------------------------------------------------- Chebyshev series
+// Terms 2..K of the Chebyshev recurrence of spectral_igl.approx.uniformization.chebyshev_blocks
+// on a block-diagonal CSR matrix P (n x n, its factor -2/sigma taken in) and row-major blocks
+// of w columns. Term k runs on the blocks within the leading rows[k] rows:
+//     t_k = P t_{k-1} - t_{k-2} (in t_{k-2}'s place), W += C[b, k] t_k (b the row's block).
+// Every entry is rounded exactly as the numpy form (q = P @ t1, summed in stored order from
+// 0; q - t0; W += coef * t) rounds it, so the two agree bit for bit and the series' proved
+// rounding bound holds for both. No fused multiply-add: the AVX2 clone is compiled without
+// FMA, and the baseline has none. The blocks are independent, so each runs all its terms
+// while its rows are in cache, and threads take whole blocks from a shared counter: no
+// barrier, and the result does not depend on the number of threads.
+template <int WC, class I>
+ISA_BODY void chebyshev_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                              const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    const int width = WC > 0 ? WC : w;
+    double qbuf[WC > 0 ? WC : 1];
+    std::vector<double> qvec(WC > 0 ? 0 : size_t(width));
+    double *q = WC > 0 ? qbuf : qvec.data();
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int k = 2; k <= K && rows[k] >= hi; ++k) {
+        const double ck = C[b * (K + 1) + k];
+        for (int64_t i = lo; i < hi; ++i) {
+            for (int c = 0; c < width; ++c) q[c] = 0.0;
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const double *x = t1 + int64_t(ix[p]) * width;
+                for (int c = 0; c < width; ++c) q[c] += a * x[c];
+            }
+            double *y = t0 + i * width, *acc = W + i * width;
+            for (int c = 0; c < width; ++c) {
+                const double t = q[c] - y[c];
+                y[c] = t;
+                acc[c] += ck * t;
+            }
+        }
+        std::swap(t0, t1);
+    }
+}
+
+template <class I>
+ISA_BODY void chebyshev_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
+                             double *t0, double *W) {
+    for (int64_t b = next++; b < nblocks; b = next++) {
+        switch (w) {
+        case 32: chebyshev_block<32>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 16: chebyshev_block<16>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 8: chebyshev_block<8>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        case 4: chebyshev_block<4>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
+        default: chebyshev_block<0>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W);
+        }
+    }
+}
+template <class I>
+ISA_AVX2 void chebyshev_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
+                             double *t0, double *W) {
+    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
+}
+template <class I>
+ISA_BASELINE void chebyshev_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
+                                     const I *ix, const double *px, const int64_t *off, const double *C,
+                                     const int64_t *rows, double *t1, double *t0, double *W) {
+    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
+}
+
+// The Poisson (uniformization) series of spectral_igl.approx.uniformization.uniformize_blocks
+// on the same block-diagonal P: for block b and terms k = 1..K (while rows[k] covers the
+// block), q_k = (P q_{k-1}) * (lam[b] / k) and W += q_k, with q_0 = W's block on entry
+// (scaled by the caller); rounded as the numpy form (q = P @ q; q *= lam / k; W += q) is.
+// q and s are scratch rows of the block's size.
+template <int WC, class I>
+ISA_BODY void poisson_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                            const double *lam, const int64_t *rows, double *q, double *s, double *W) {
+    const int width = WC > 0 ? WC : w;
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int64_t i = lo; i < hi; ++i)
+        for (int c = 0; c < width; ++c) q[i * width + c] = W[i * width + c];
+    for (int k = 1; k <= K && rows[k] >= hi; ++k) {
+        const double ck = lam[b] / double(k);
+        for (int64_t i = lo; i < hi; ++i) {
+            double *y = s + i * width;
+            for (int c = 0; c < width; ++c) y[c] = 0.0;
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const double *x = q + int64_t(ix[p]) * width;
+                for (int c = 0; c < width; ++c) y[c] += a * x[c];
+            }
+            double *acc = W + i * width;
+            for (int c = 0; c < width; ++c) {
+                y[c] *= ck;
+                acc[c] += y[c];
+            }
+        }
+        std::swap(q, s);
+    }
+}
+
+template <class I>
+ISA_BODY void poisson_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
+                           double *s, double *W) {
+    for (int64_t b = next++; b < nblocks; b = next++) {
+        switch (w) {
+        case 32: poisson_block<32>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        case 16: poisson_block<16>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        case 8: poisson_block<8>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
+        default: poisson_block<0>(b, K, w, ip, ix, px, off, lam, rows, q, s, W);
+        }
+    }
+}
+template <class I>
+ISA_AVX2 void poisson_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
+                           double *s, double *W) {
+    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+}
+template <class I>
+ISA_BASELINE void poisson_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
+                                   const I *ix, const double *px, const int64_t *off, const double *lam,
+                                   const int64_t *rows, double *q, double *s, double *W) {
+    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+}
+
+using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using Coefs = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+
+// Checks everything the series' loops read: P (n x n CSR) block diagonal on the offsets, rows
+// (K + 1 entries) block boundaries that never grow from term `first` on, the blocks of n rows
+// and w columns distinct.
+template <class I>
+void check_series(const In1<I> &indptr, const In1<I> &indices, const In1<double> &data, const In1<int64_t> &offsets,
+                  const In1<int64_t> &rows, int64_t K, int first, const std::vector<const Block *> &blocks, int threads) {
+    const int64_t n = int64_t(blocks[0]->shape(0)), w = int64_t(blocks[0]->shape(1));
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1;
+    if (nblocks < 0) throw std::invalid_argument("offsets must have at least one entry");
+    if (int64_t(rows.shape(0)) != K + 1) throw std::invalid_argument("rows must have one entry per term");
+    for (const Block *B : blocks)
+        if (int64_t(B->shape(0)) != n || int64_t(B->shape(1)) != w)
+            throw std::invalid_argument("the dense blocks must have one shape");
+    for (size_t a = 0; a < blocks.size(); ++a)
+        for (size_t c = a + 1; c < blocks.size(); ++c)
+            if (blocks[a]->data() == blocks[c]->data()) throw std::invalid_argument("the dense blocks must be distinct arrays");
+    if (w < 1 || w > (1 << 20) || K > (1 << 24)) throw std::invalid_argument("1 to 2**20 columns, at most 2**24 terms");
+    if (threads < 1) throw std::invalid_argument("threads must be at least 1");
+    if (int64_t(indptr.shape(0)) != n + 1) throw std::invalid_argument("indptr must have n + 1 entries");
+    const int64_t *off = offsets.data(), *rw = rows.data();
+    if (off[0] != 0 || off[nblocks] != n) throw std::invalid_argument("offsets must run from 0 to n");
+    for (int64_t b = 0; b < nblocks; ++b)
+        if (off[b + 1] < off[b]) throw std::invalid_argument("offsets must not decrease");
+    for (int64_t k = first; k <= K; ++k)
+        if (rw[k] < 0 || rw[k] > n || (k > first && rw[k] > rw[k - 1]) ||
+            !std::binary_search(off, off + nblocks + 1, rw[k]))
+            throw std::invalid_argument("rows must be block boundaries that never grow");
+    const I *ip = indptr.data(), *ix = indices.data();
+    if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0)) || int64_t(ip[n]) > int64_t(data.shape(0)))
+        throw std::invalid_argument("indptr does not fit indices and data");
+    for (int64_t b = 0; b < nblocks; ++b)
+        for (int64_t i = off[b]; i < off[b + 1]; ++i) {
+            if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
+            for (I p = ip[i]; p < ip[i + 1]; ++p)
+                if (int64_t(ix[p]) < off[b] || int64_t(ix[p]) >= off[b + 1])
+                    throw std::invalid_argument("indices out of range: P must be block diagonal on the offsets");
+        }
+}
+
+// Runs body(next) on `threads` threads (at most one per block) without the GIL.
+template <class F>
+void on_threads(int threads, int64_t nblocks, F body) {
+    nb::gil_scoped_release rel;
+    std::atomic<int64_t> next(0);
+    std::vector<std::thread> pool;
+    const int extra = int(std::min<int64_t>(threads, nblocks)) - 1;
+    for (int j = 0; j < extra; ++j) pool.emplace_back([&] { body(next); });
+    body(next);
+    for (auto &th : pool) th.join();
+}
+
+template <class I>
+void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
+                      In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(C.shape(1)) - 1;
+    if (int64_t(C.shape(0)) != nblocks) throw std::invalid_argument("C must have one row per block");
+    check_series<I>(indptr, indices, data, offsets, rows, K, 2, {&t1, &t0, &W}, threads);
+    if (K < 2) return;
+    const int w = int(t1.shape(1));
+    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
+        if (isa::avx2())
+            chebyshev_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                              C.data(), rows.data(), t1.data(), t0.data(), W.data());
+        else
+            chebyshev_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                                  C.data(), rows.data(), t1.data(), t0.data(), W.data());
+    });
+}
+
+template <class I>
+void poisson_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, In1<double> lam,
+                    In1<int64_t> rows, Block q, Block s, Block W, int threads) {
+    const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(rows.shape(0)) - 1;
+    if (int64_t(lam.shape(0)) != nblocks) throw std::invalid_argument("lam must have one entry per block");
+    check_series<I>(indptr, indices, data, offsets, rows, K, 1, {&q, &s, &W}, threads);
+    const int w = int(q.shape(1));
+    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
+        if (isa::avx2())
+            poisson_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                            lam.data(), rows.data(), q.data(), s.data(), W.data());
+        else
+            poisson_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                                lam.data(), rows.data(), q.data(), s.data(), W.data());
+    });
+}
+
+// ------------------------------------------------------------------------- regions
+// spectral_igl.approx.region.grow_regions: for each group b of sources, the vertices within
+// radii[b] of them along the edges of a symmetric CSR pattern, edge (i, j) of length
+// sqrt(0.5 (h2[i] + h2[j])), found ring by ring (a vertex's distance through the ring before
+// it, the smallest over its edges from that ring); a group whose region passes limits[b]
+// vertices takes its source's whole component (labels) instead. Every distance is rounded as
+// the numpy form rounds it, so both give the same regions. Returns the sorted keys
+// b * n + vertex and the regions' offsets.
+template <class I>
+nb::tuple grow_regions(In1<I> indptr, In1<I> indices, In1<double> h2, In1<int64_t> sources, In1<int64_t> offsets,
+                       In1<double> radii, In1<int64_t> limits, In1<int64_t> labels) {
+    const int64_t n = int64_t(h2.shape(0)), groups = int64_t(offsets.shape(0)) - 1;
+    if (groups < 0 || int64_t(radii.shape(0)) != groups || int64_t(limits.shape(0)) != groups)
+        throw std::invalid_argument("radii and limits must have one entry per group");
+    if (int64_t(indptr.shape(0)) != n + 1 || int64_t(labels.shape(0)) != n)
+        throw std::invalid_argument("indptr must have n + 1 entries and labels n");
+    const I *ip = indptr.data(), *ix = indices.data();
+    const int64_t *off = offsets.data(), *src = sources.data(), *lab = labels.data();
+    if (ip[0] != 0 || int64_t(ip[n]) > int64_t(indices.shape(0))) throw std::invalid_argument("indptr does not fit indices");
+    for (int64_t i = 0; i < n; ++i)
+        if (ip[i + 1] < ip[i]) throw std::invalid_argument("indptr must not decrease");
+    for (int64_t p = 0; p < int64_t(ip[n]); ++p)
+        if (ix[p] < 0 || int64_t(ix[p]) >= n) throw std::invalid_argument("indices out of range");
+    if (off[0] != 0 || off[groups] != int64_t(sources.shape(0))) throw std::invalid_argument("offsets must run over the sources");
+    for (int64_t b = 0; b < groups; ++b)
+        if (off[b + 1] <= off[b]) throw std::invalid_argument("every group must hold a source");
+    for (int64_t q = 0; q < int64_t(sources.shape(0)); ++q)
+        if (src[q] < 0 || src[q] >= n) throw std::invalid_argument("sources out of range");
+    std::vector<int64_t> keys, roff(size_t(groups) + 1, 0);
+    {
+        nb::gil_scoped_release rel;
+        const double *hh = h2.data(), *rad = radii.data();
+        const size_t nn = static_cast<size_t>(n);
+        std::vector<int64_t> seen(nn, -1), ring(nn, -1);
+        std::vector<double> dist(nn), cand(nn);
+        std::vector<int64_t> region, front, next, found;
+        int64_t stamp = 0;
+        for (int64_t b = 0; b < groups; ++b) {
+            region.assign(src + off[b], src + off[b + 1]);
+            std::sort(region.begin(), region.end());
+            region.erase(std::unique(region.begin(), region.end()), region.end());
+            for (int64_t v : region) seen[v] = b, dist[v] = 0.0;
+            front = region;
+            bool over = int64_t(region.size()) > limits.data()[b];
+            while (!front.empty() && !over) {
+                ++stamp;
+                found.clear();
+                for (int64_t v : front)
+                    for (I p = ip[v]; p < ip[v + 1]; ++p) {
+                        const int64_t j = ix[p];
+                        if (seen[j] == b) continue;
+                        const double d = dist[v] + std::sqrt(0.5 * (hh[v] + hh[j]));
+                        if (ring[j] != stamp) ring[j] = stamp, cand[j] = d, found.push_back(j);
+                        else if (d < cand[j]) cand[j] = d;
+                    }
+                next.clear();
+                for (int64_t j : found)
+                    if (cand[j] <= rad[b]) seen[j] = b, dist[j] = cand[j], next.push_back(j), region.push_back(j);
+                front.swap(next);
+                over = int64_t(region.size()) > limits.data()[b];
+            }
+            if (over) {
+                region.clear();
+                const int64_t c = lab[src[off[b]]];
+                for (int64_t v = 0; v < n; ++v)
+                    if (lab[v] == c) region.push_back(v);
+            }
+            std::sort(region.begin(), region.end());
+            for (int64_t v : region) keys.push_back(b * n + v);
+            roff[size_t(b) + 1] = int64_t(keys.size());
+        }
+    }
+    const size_t k = keys.size(), g = roff.size();
+    return nb::make_tuple(to_numpy<int64_t>(std::move(keys), {k}), to_numpy<int64_t>(std::move(roff), {g}));
+}
+
 template <class T>
 void bind_factor(nb::module_ &mod, const char *name) {
     using FT = Factor<T>;
@@ -1017,6 +1309,32 @@ NB_MODULE(_ldlt, mod) {
     mod.def("kernel_isa", [] { return isa::avx2() ? "avx2" : "baseline"; },
             "Instruction set of the kernels in use: 'avx2', or 'baseline' (no AVX2 on this CPU, "
             "another compiler, or SPECTRAL_IGL_BASELINE=1).");
+    mod.def("chebyshev_series", &chebyshev_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            "Terms 2..K of a Chebyshev recurrence on a block-diagonal CSR P: at term k, on the blocks in rows[:rows[k]], "
+            "t_k = P t_{k-1} - t_{k-2} (written over t_{k-2}; the two swap roles each term) and "
+            "W += C[block, k] t_k, rounded as the numpy form is (spectral_igl.approx.uniformization."
+            "chebyshev_blocks); t1 and t0 are left as scratch. Blocks go to `threads` threads; the result "
+            "does not depend on their number.");
+    mod.def("chebyshev_series", &chebyshev_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1);
+    mod.def("poisson_series", &poisson_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            "Terms 1..K of a Poisson series on a block-diagonal CSR P, from W's blocks: on the blocks in "
+            "rows[:rows[k]], q_k = (P q_{k-1}) * (lam[block] / k) and W += q_k, rounded as the numpy form is "
+            "(spectral_igl.approx.uniformization.uniformize_blocks); q and s are scratch. Blocks go to `threads` "
+            "threads; the result does not depend on their number.");
+    mod.def("poisson_series", &poisson_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
+            nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
+            nb::arg("W").noconvert(), nb::arg("threads") = 1);
+    mod.def("grow_regions", &grow_regions<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("h2"),
+            nb::arg("sources"), nb::arg("offsets"), nb::arg("radii"), nb::arg("limits"), nb::arg("labels"),
+            "(keys, region offsets) of spectral_igl.approx.region.grow_regions, group by group.");
+    mod.def("grow_regions", &grow_regions<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("h2"),
+            nb::arg("sources"), nb::arg("offsets"), nb::arg("radii"), nb::arg("limits"), nb::arg("labels"));
     bind_factor<double>(mod, "FactorD");
     bind_factor<cplx>(mod, "FactorZ");
 }

@@ -405,3 +405,152 @@ def test_sparse_heat_kernel_with_a_sliver_every_entry(name, t):
     assert np.all((exact <= info["dropped_max"][None, :] + slack)[~stored])
     assert np.all(lap.mass @ np.where(stored, 0.0, exact) <= info["dropped_mass"] + REFERENCE)
     assert np.all(info["bnorm_error"] <= 1e-8 / np.sqrt(lap.mass))
+
+
+def _numpy_series(P, offsets, C, rows, t1, t0, W):
+    """The numpy form of the Chebyshev terms 2..K that the compiled loop replaces."""
+    counts = np.diff(offsets)
+    for k in range(2, C.shape[1]):
+        r = rows[k]
+        q = P[:r, :r] @ t1[:r]
+        new = t0[:r]
+        np.subtract(q, new, out=new)
+        t0, t1 = t1, t0
+        W[:r] += np.repeat(C[:, k], counts)[:r, None] * new
+    return W
+
+
+@pytest.mark.parametrize("width", [32, 16, 5, 1])
+def test_compiled_chebyshev_series_rounds_as_numpy(width):
+    """The compiled recurrence agrees bit for bit with the numpy form whose rounding the
+    series' bound is proved for, on blocks that stop at their own terms (leading rows)."""
+    import scipy.sparse as sp
+
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    rng = np.random.default_rng(width)
+    sizes = [40, 25, 31]
+    blocks = [sp.random(s, s, density=0.2, random_state=rng) for s in sizes]
+    P = sp.csr_matrix(sp.block_diag([b + b.T - sp.diags(rng.uniform(0, 1, s)) for b, s in zip(blocks, sizes)]))
+    offsets = np.r_[0, np.cumsum(sizes)]
+    n, K = P.shape[0], 9
+    C = rng.standard_normal((len(sizes), K + 1))
+    rows = [0, 0] + [int(offsets[3 if k < 5 else 2 if k < 8 else 1]) for k in range(2, K + 1)]
+    t0, t1 = rng.standard_normal((n, width)), rng.standard_normal((n, width))
+    W = rng.standard_normal((n, width))
+    want = _numpy_series(P, offsets, C, rows, t1.copy(), t0.copy(), W.copy())
+    for threads in (1, 2, 5):
+        got = W.copy()
+        assert ldlt.chebyshev_series(P, offsets, C, rows, t1.copy(), t0.copy(), got, threads=threads)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="block diagonal"):
+        coupled = P.tolil()
+        coupled[0, offsets[1]] = 1.0
+        ldlt.chebyshev_series(coupled.tocsr(), offsets, C, rows, t1, t0, W)
+    with pytest.raises(ValueError, match="block boundaries"):
+        ldlt.chebyshev_series(P, offsets, C, rows[:-1] + [offsets[1] + 1], t1, t0, W)
+    with pytest.raises(ValueError, match="indices out of range"):
+        bad = P.copy()
+        bad.indices[3] = n
+        ldlt.chebyshev_series(bad, offsets, C, rows, t1, t0, W)
+    with pytest.raises(ValueError, match="one shape"):
+        ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
+
+
+@pytest.mark.parametrize("width", [32, 16, 3])
+def test_compiled_poisson_series_rounds_as_numpy(width):
+    """The compiled uniformization terms agree bit for bit with their numpy form, for any
+    number of threads, on blocks that stop at their own terms."""
+    import scipy.sparse as sp
+
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    rng = np.random.default_rng(10 + width)
+    sizes = [30, 45, 20, 12]
+    P = sp.csr_matrix(sp.block_diag([sp.random(s, s, density=0.25, random_state=rng) + sp.eye(s) for s in sizes]))
+    offsets = np.r_[0, np.cumsum(sizes)]
+    lam = rng.uniform(0.5, 3.0, len(sizes))
+    K = 12
+    rows = [0] + [int(offsets[4 if k < 6 else 2 if k < 10 else 1]) for k in range(1, K + 1)]
+    W0 = rng.uniform(0, 1, (P.shape[0], width))
+    want, q = W0.copy(), W0.copy()
+    lam_rows = np.repeat(lam, sizes)[:, None]
+    for k in range(1, K + 1):
+        q = P[:rows[k], :rows[k]] @ q[:rows[k]]
+        q *= lam_rows[:rows[k]] / k
+        want[:rows[k]] += q
+    for threads in (1, 2, 7):
+        got = W0.copy()
+        assert ldlt.poisson_series(P, offsets, lam, rows, got, threads=threads)
+        assert np.array_equal(got, want)
+    with pytest.raises(ValueError, match="one entry per block"):
+        ldlt.poisson_series(P, offsets, lam[:-1], rows, W0.copy())
+
+
+def test_sparse_heat_kernel_same_with_the_compiled_series(monkeypatch):
+    """sparse_heat_kernel gives the same matrix and bounds, bit for bit, with the compiled
+    series and with their numpy forms (the path taken where the extension is missing)."""
+    from spectral_igl.approx import uniformization
+
+    lap = _exact("sliver")[0]
+    calls = []
+    for name in ("chebyshev_series", "poisson_series"):
+        compiled = getattr(uniformization, name)
+        monkeypatch.setattr(uniformization, name, lambda *a, f=compiled, name=name: calls.append(name) or f(*a))
+    K, info = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
+    # the sliver's regions took the Chebyshev series, the others uniformization
+    assert set(calls) == {"chebyshev_series", "poisson_series"}
+    monkeypatch.setattr(uniformization, "chebyshev_series", lambda *a: False)
+    monkeypatch.setattr(uniformization, "poisson_series", lambda *a: False)
+    K2, info2 = sig.sparse_heat_kernel(lap, 2e-4, block=16, return_info=True)
+    assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
+
+
+def test_first_radii_are_first_radius_per_source():
+    """The radii of many sources at once are those of one source at a time, in the hop regime
+    (t short against the spacing), the Gaussian one, and for isolated vertices (spacing inf)."""
+    from spectral_igl.approx.region import first_radii, first_radius
+
+    rng = np.random.default_rng(3)
+    h2 = rng.uniform(1e-6, 1e-4, 400)
+    h2[::9] = np.inf
+    goal = 10.0 ** rng.uniform(-16, 0, 400)
+    for t in (1e-7, 6e-7, 1e-5):
+        want = [first_radius(t, float(a), float(g)) for a, g in zip(h2, goal)]
+        assert np.array_equal(first_radii(t, h2, goal), want)
+
+
+@pytest.mark.parametrize("name", ["grid", "two", "sliver"])
+def test_compiled_regions_are_the_numpy_regions(name, monkeypatch):
+    """grow_regions gives the same keys in the compiled loop as in its numpy form, with groups
+    that stop at their radius and groups that pass their limit (whole component)."""
+    import scipy.sparse as sp
+
+    from spectral_igl.approx import region
+    from spectral_igl.linalg import ldlt
+
+    if not ldlt.available():
+        pytest.skip("no compiled extension")
+    lap = _exact(name)[0]
+    L, h2, labels = sp.csr_matrix(lap.L), region.vertex_spacing(lap), lap.components
+    rng = np.random.default_rng(5)
+    sizes = [3, 1, 6, 10, 1, 19]
+    # each group's sources in one component (that of its first)
+    groups = []
+    for size in sizes:
+        first = rng.integers(lap.n)
+        same = np.flatnonzero(labels == labels[first])
+        groups.append(np.r_[first, rng.choice(same, size - 1)])
+    sources, offsets = np.concatenate(groups), np.r_[0, np.cumsum(sizes)]
+    radii = rng.uniform(0.01, 0.3, len(sizes))
+    limits = np.array([lap.n, 10, lap.n, 5, lap.n, lap.n])
+    got = region.grow_regions(L, h2, sources, offsets, radii, limits, labels)
+    monkeypatch.setattr(region, "region_keys", lambda *a: None)
+    want = region.grow_regions(L, h2, sources, offsets, radii, limits, labels)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+    whole = np.bincount(labels)[labels[sources[offsets[:-1]]]]
+    assert np.any(np.diff(got[1]) == whole) and np.any(np.diff(got[1]) < whole)

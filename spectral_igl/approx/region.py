@@ -48,6 +48,7 @@ import scipy.sparse as sp
 
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
+from ..linalg.ldlt import region_keys
 from .uniformization import (abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
                              spectral_top, terms, uniformize, uniformize_blocks)
 
@@ -188,6 +189,9 @@ def grow_regions(L, h2, sources, offsets, radii, limits, labels):
     region_offsets : (g + 1,) int
         Group b's region is ``keys[region_offsets[b]:region_offsets[b+1]] % n``.
     """
+    compiled = region_keys(L, h2, sources, offsets, radii, limits, labels)
+    if compiled is not None:
+        return compiled
     n = L.shape[0]
     count = len(offsets) - 1
     group = np.repeat(np.arange(count, dtype=np.int64), np.diff(offsets))
@@ -542,8 +546,11 @@ def first_radii(t: float, h2, goal) -> np.ndarray:
     h2 = np.asarray(h2, dtype=float)
     goal = np.asarray(goal, dtype=float)
     radii = _gaussian_radius(t, goal)
-    for i in np.flatnonzero(4.25 * t / h2 < 0.2):      # the hop regime: few sources, one by one
-        radii[i] = first_radius(t, float(h2[i]), float(goal[i]))
+    hop = np.flatnonzero(4.25 * t / h2 < 0.2)
+    if hop.size:
+        hops = np.minimum(poisson_terms(t, 4.25 / h2[hop], np.minimum(goal[hop], 0.5)), 6)
+        # (an isolated vertex's spacing is inf and its rate 0: no hops, and no 0 * inf)
+        radii[hop] = np.maximum(radii[hop], hops * np.sqrt(np.where(hops > 0, h2[hop], 0.0)))
     return radii
 
 

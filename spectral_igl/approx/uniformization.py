@@ -46,6 +46,7 @@ from scipy.special import gammaln
 
 from ..accuracy import UNIT_ROUNDOFF as U, rounding_gamma as _gamma
 from ..filters import heat
+from ..linalg.ldlt import chebyshev_series, poisson_series
 from .polynomial import ChebyshevPlan
 
 __all__ = ["metzler_heat", "uniformize", "uniformize_blocks", "rate", "rate_matrix", "spectral_top", "abs_radius", "products_needed", "terms", "STEP", "TAIL",
@@ -198,15 +199,17 @@ def terms(t: float, alpha: float, tail: float = TAIL) -> int:
     return s * _terms(lam, tail / s)[0]
 
 
-def poisson_terms(t: float, alpha, tail: float = TAIL) -> np.ndarray:
-    """:func:`terms` of many rates at once (array; 0 where a rate is 0)."""
+def poisson_terms(t: float, alpha, tail=TAIL) -> np.ndarray:
+    """:func:`terms` of many rates (and tails, one or one per rate) at once (array; 0 where a
+    rate is 0)."""
     alpha = np.asarray(alpha, dtype=float)
+    tail = np.broadcast_to(np.asarray(tail, dtype=float), alpha.shape)
     lam = t * alpha
     s = np.maximum(1.0, np.ceil(lam / STEP))
     out = np.zeros(alpha.size, dtype=np.int64)
     pos = lam > 0
     if pos.any():
-        out[pos] = s[pos].astype(np.int64) * _terms_many(lam[pos] / s[pos], tail / s[pos])[0]
+        out[pos] = s[pos].astype(np.int64) * _terms_many(lam[pos] / s[pos], tail[pos] / s[pos])[0]
     return out
 
 
@@ -364,19 +367,20 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     head = _leading(P, offsets, need)
 
     V = G.copy()
-    work = 0
+    heads = [head(k) for k in range(1, K + 1)]
+    work = s * sum(Pk.nnz for _, Pk in heads)
     for _ in range(s):
         # term k, c_k P^k V with c_k = e^-lam lam^k / k!, as (lam / k) P (term k - 1): the same
         # roundings as the coefficient and the products formed apart (module notes)
         q = V * (float(math.exp(-lams[0])) if single else
                  np.repeat([math.exp(-x) for x in lams], counts)[:, None])
-        W = q.copy()
-        for k in range(1, K + 1):
-            rows, Pk = head(k)
-            q = Pk @ q[:rows]
-            q *= lam_rows / k if single else lam_rows[:rows] / k
-            W[:rows] += q
-            work += Pk.nnz
+        W = np.ascontiguousarray(q)
+        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + [rows for rows, _ in heads], W)):
+            W = q.copy()
+            for k, (rows, Pk) in enumerate(heads, start=1):
+                q = Pk @ q[:rows]
+                q *= lam_rows / k if single else lam_rows[:rows] / k
+                W[:rows] += q
         V = W
     # each step's relative rounding (module notes), with K terms for every block
     eps1 = 33.0 * U + _gamma(r) * (1.0 + 33.0 * U)
@@ -582,16 +586,17 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
         t1 *= 0.5
         W += np.repeat(C[:, 1], counts)[:, None] * t1
         work += P.nnz
-    for k in range(2, K + 1):
-        rows, Pk = head(k)
-        q = Pk @ t1[:rows]
-        new = t0[:rows]
-        np.subtract(q, new, out=new)              # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
-        t0, t1 = t1, t0
-        np.multiply(new, np.repeat(C[:, k], counts)[:rows, None], out=q)
-        W[:rows] += q
-        work += Pk.nnz
-    del t0, t1
+    heads = [head(k) for k in range(2, K + 1)]
+    work += sum(Pk.nnz for _, Pk in heads)
+    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + [rows for rows, _ in heads], t1, t0, W)):
+        for k, (rows, Pk) in enumerate(heads, start=2):
+            q = Pk @ t1[:rows]
+            new = t0[:rows]
+            np.subtract(q, new, out=new)          # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
+            t0, t1 = t1, t0
+            np.multiply(new, np.repeat(C[:, k], counts)[:rows, None], out=q)
+            W[:rows] += q
+    del heads
     np.maximum(W, 0.0, out=W)
     _, r = _local_rounding(P)
     zeta = (r + 4) * float(np.finfo(float).smallest_subnormal) * np.sqrt(np.asarray(volume, float))
