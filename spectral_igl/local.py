@@ -591,10 +591,25 @@ def _row_blocks(M):
         yield int(M.indptr[a]), int(M.indptr[b]), np.repeat(np.arange(a, b), np.diff(M.indptr[a:b + 1]))
 
 
+def _release_freed_memory():
+    """Hand the memory the C library's allocator holds freed back to the system (glibc's
+    ``malloc_trim``; nothing elsewhere): the batches' pieces are many arrays of a few
+    megabytes, which the allocator keeps on its heap once freed, so K's arrays, allocated next,
+    would come on top of them (the 140k bunny's peak resident memory: 1.86 GB without, 1.67 GB
+    with)."""
+    import ctypes
+
+    try:
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError):          # pragma: no cover - not glibc
+        pass
+
+
 def _symmetric(n, pieces):
     """K = max(C, C^T) from the computed columns (notes of :func:`sparse_heat_kernel`), by
     blocks of rows, the columns' arrays freed before K's are joined."""
     A = _by_columns(n, pieces)                   # C^T
+    _release_freed_memory()                      # the pieces' (small, heap) arrays
     step = max(1, int(n * ASSEMBLY_CHUNK // max(A.nnz, 1)))
     parts = []
     for a in range(0, n, step):
