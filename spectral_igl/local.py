@@ -306,7 +306,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
         :math:`\sum_{i\ \text{not stored}} B_{ii}(K_t)_{ij}`; ``m_lost`` (n,): the heat of each
         column outside its region; ``bnorm_error`` (n,); ``region`` (n,) (vertices of each
         column's region); ``products`` (sparse products of the whole operator spent in all);
-        ``bound_kind`` ``"proof"``; ``method`` ``"local"``; ``tol``; ``threshold``; ``time``.
+        ``bound_kind`` ``"proof"``; ``method`` ``"local"``; ``tol``; ``threshold``; ``time`` (absolute).
 
     Raises
     ------
@@ -381,7 +381,7 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
         return K
     E = _entry_bounds(K, lap.mass, per.pop("rel"), per.pop("add"), per["m_lost"])
     per["region"] = per["region"].astype(np.int64)
-    info = make_info(0.0, "proof", "local", tol=tol, threshold=threshold, products=products, **per)
+    info = make_info(0.0, "proof", "local", tol=tol, threshold=threshold, products=products, time=t, **per)
     info["abs_error"] = E                      # sparse, with K's pattern
     return K, info
 

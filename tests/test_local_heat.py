@@ -554,3 +554,15 @@ def test_compiled_regions_are_the_numpy_regions(name, monkeypatch):
     assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
     whole = np.bincount(labels)[labels[sources[offsets[:-1]]]]
     assert np.any(np.diff(got[1]) == whole) and np.any(np.diff(got[1]) < whole)
+
+
+def test_sparse_heat_kernel_reports_its_absolute_time():
+    """info["time"] is the absolute time the kernel was computed at, whatever unit t was given
+    in (a mesh of area 0.02: t = 1e-4 of the shape's area is 2e-6)."""
+    V, F = icosphere(3)
+    lap = sig.laplacian(V, F)
+    lap = sig.laplacian(V * np.sqrt(0.02 / lap.area()), F)
+    K, info = sig.sparse_heat_kernel(lap, 1e-4, time_unit="shape", return_info=True)
+    assert np.isclose(info["time"], sig.shape_time(lap, 1e-4), rtol=0) and np.isclose(info["time"], 2e-6, rtol=1e-12)
+    K2 = sig.sparse_heat_kernel(lap, info["time"])
+    assert (K != K2).nnz == 0
