@@ -56,6 +56,7 @@ evaluated globally by :func:`~spectral_igl.heat_kernel` (``info["method"]`` then
 from __future__ import annotations
 
 from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import scipy.sparse as sp
@@ -69,6 +70,7 @@ from .approx.region import (GROWTH, MAX_FRACTION, dirichlet_heat_blocks, first_r
 from .filters import heat, mexican_hat
 from .kernels import heat_kernel, spectral_kernel
 from .laplacian import Laplacian, as_laplacian, shape_time
+from .linalg.threads import blas_threads
 
 __all__ = ["local_heat_kernel", "local_mexican_hat", "sparse_heat_kernel", "sparse_diffusion_distance"]
 
@@ -362,19 +364,9 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
     # the groups by decreasing width, a batch's groups at least half as wide as its first: its
     # series is as wide as its widest group (the retries, queued apart, likewise)
     queue = deque(sorted(_first_groups(ctx, patches(lap.L, block)), key=lambda g: -g[0].size))
-    retries = []
-    pieces, products = [], 0.0
-    while queue or retries:
-        if not queue:
-            queue = deque(sorted(retries, key=lambda g: -g[0].size))
-            retries = []
-        batch = [queue.popleft()]
-        size = batch[0][0].size
-        # a small first batch calibrates the first radius (ctx["scale"]) for the others
-        while queue and size < (BATCH if pieces else FIRST_BATCH) and 2 * queue[0][0].size >= batch[0][0].size:
-            batch.append(queue.popleft())
-            size += batch[-1][0].size
-        products += _solve_batch(ctx, batch, pieces, per, retries)
+    pieces = []
+    with blas_threads():                         # the workers' own sections nest in this one
+        products = _run_batches(ctx, queue, pieces, per)
     K = _symmetric(n, pieces)
     warn_missed("sparse_heat_kernel", per["bnorm_error"], tol / np.sqrt(lap.mass), stacklevel=3)
     if not return_info:
@@ -389,6 +381,9 @@ def sparse_heat_kernel(lap: Laplacian, t: float, threshold: float = 1e-8, tol: f
 #: sources whose regions one stacked series solves at once in :func:`sparse_heat_kernel`: a few
 #: hundred keep the series' dense blocks in cache (2048 cost 1.6 times as much on a 43k scan)
 BATCH = 256
+#: batches of :func:`sparse_heat_kernel` in flight at once (:func:`_run_batches`); 1: one after
+#: the other, in this thread
+PIPELINE = 2
 #: sources of the first batch, which calibrates the first radius of the others
 FIRST_BATCH = 128
 #: largest stacked series (regions' rows times sources per group) before a batch is split
@@ -430,18 +425,66 @@ def _first_groups(ctx, groups):
     return [(g, r, True) for g, r in zip(groups, np.maximum.reduceat(radii, starts).tolist())]
 
 
-def _solve_batch(ctx, batch, pieces, per, queue):
+def _run_batches(ctx, queue, pieces, per):
+    """Solve the queued groups by batches (:func:`_solve_batch`), :data:`PIPELINE` batches in
+    flight: a batch's Python work (its regions, their operators and bounds) runs while the
+    compiled series of the one before runs without the GIL. Each batch is formed, and its first
+    radius scaled, from the batches collected before it, which are collected in order, so the
+    result does not depend on the threads' timing: batch i sees the calibration of batches
+    0..i-PIPELINE, and the first batch is collected before any other is formed. Returns the
+    products spent."""
+    retries, products, pending, calibrated = [], 0.0, deque(), False
+    pool = ThreadPoolExecutor(PIPELINE) if PIPELINE > 1 else None
+    try:
+        while queue or retries or pending:
+            if pending and (len(pending) >= PIPELINE or not calibrated or not queue):
+                spent, again, factors = pending.popleft().result()
+                products += spent
+                retries.extend(again)
+                for f in factors:
+                    ctx["scale"] *= f
+                calibrated = True
+                continue
+            if not queue:
+                queue = deque(sorted(retries, key=lambda g: -g[0].size))
+                retries = []
+            batch = [queue.popleft()]
+            size = batch[0][0].size
+            # a small first batch calibrates the first radius (ctx["scale"]) for the others
+            while queue and size < (BATCH if calibrated else FIRST_BATCH) and 2 * queue[0][0].size >= batch[0][0].size:
+                batch.append(queue.popleft())
+                size += batch[-1][0].size
+            args = (ctx, batch, ctx["scale"], pieces, per)
+            pending.append(pool.submit(_solve_batch, *args) if pool else _Done(_solve_batch(*args)))
+    finally:
+        if pool:
+            pool.shutdown(cancel_futures=True)
+    return products
+
+
+class _Done:
+    """A result already computed, read as a future's."""
+
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def _solve_batch(ctx, batch, scale, pieces, per):
     """Solve the columns of a batch of (sources, radius, first attempt) groups in one stacked
     series (each group on its own region); keep the columns that meet their target
-    (:func:`_keep`) and queue the others with a larger radius. A first attempt's radius is
-    scaled by ``ctx["scale"]``, which follows what the batch's first attempts needed (the
+    (:func:`_keep`) and return the others with a larger radius. A first attempt's radius is
+    scaled by ``scale``, which follows what earlier batches' first attempts needed (the
     Gaussian tail's law between the heat allowed and the heat lost), so that most columns are
-    solved at once. Returns the products spent (of the whole operator)."""
+    solved at once. Returns (the products spent, of the whole operator; the groups to retry;
+    the factors of ``scale`` this batch calls for, :func:`_calibration`)."""
     lap, t, mass, labels = ctx["lap"], ctx["t"], ctx["mass"], ctx["labels"]
     sources = np.concatenate([g for g, _, _ in batch]).astype(np.int64)
     offsets = np.cumsum([0] + [g.size for g, _, _ in batch])
     first = np.array([f for _, _, f in batch])
-    radii = np.array([r for _, r, _ in batch]) * np.where(first, ctx["scale"], 1.0)
+    radii = np.array([r for _, r, _ in batch]) * np.where(first, scale, 1.0)
     label = labels[sources[offsets[:-1]]]
     size = ctx["count"][label]
     keys, roff = grow_regions(ctx["L"], ctx["h2"], sources, offsets, radii,
@@ -449,7 +492,8 @@ def _solve_batch(ctx, batch, pieces, per, queue):
     if len(batch) > 1 and keys.size * max(g.size for g, _, _ in batch) > STACK_LIMIT:
         # regions as large as their components (large t): fewer groups at a time
         half = len(batch) // 2
-        return _solve_batch(ctx, batch[:half], pieces, per, queue) + _solve_batch(ctx, batch[half:], pieces, per, queue)
+        a, b = (_solve_batch(ctx, part, scale, pieces, per) for part in (batch[:half], batch[half:]))
+        return a[0] + b[0], a[1] + b[1], a[2] + b[2]
     # the groups in decreasing order of their regions' rates (each stops at its own terms)
     rate = np.maximum.reduceat(1.0 / ctx["h2"][keys % lap.n], roff[:-1])
     order = np.argsort(-rate, kind="stable")
@@ -487,22 +531,23 @@ def _solve_batch(ctx, batch, pieces, per, queue):
     per["rel"][sources[done]] = rel[group[done]]
     per["add"][sources[done]] = np.maximum.reduceat(add, roff[:-1], axis=0)[group, col][done]
     _keep(ctx, keys, roff, u, err, sources, group, col, done, lost, pieces, per)
+    again = []
     for g in np.unique(group[~done]):
         miss = (group == g) & ~done
-        queue.append((sources[miss], radii[g] * _growth(goal[miss], lost[miss]), False))
-    _calibrate(ctx, goal, lost, group, first & (rsize < size))
-    return spent
+        again.append((sources[miss], radii[g] * _growth(goal[miss], lost[miss]), False))
+    return spent, again, _calibration(goal, lost, group, first & (rsize < size))
 
 
-def _calibrate(ctx, goal, lost, group, first):
-    """Scale the first radius of later groups by what nine in ten of this batch's first
-    attempts needed: sqrt(log(1/goal) / log(1/lost)) of their columns (a Gaussian's tail)."""
+def _calibration(goal, lost, group, first):
+    """[The factor of the first radius of later groups] from what nine in ten of this batch's
+    first attempts needed: sqrt(log(1/goal) / log(1/lost)) of their columns (a Gaussian's
+    tail); [] when none tells."""
     use = first[group] & (goal < 1.0) & (lost > 0.0) & (lost < 1.0)
     if not np.any(use):
-        return
+        return []
     need = np.zeros(first.size)
     np.maximum.at(need, group[use], np.sqrt(np.log(1.0 / goal[use]) / np.log(1.0 / lost[use])))
-    ctx["scale"] *= max(0.8, min(2.0, 1.02 * float(np.quantile(need[np.unique(group[use])], 0.9))))
+    return [max(0.8, min(2.0, 1.02 * float(np.quantile(need[np.unique(group[use])], 0.9))))]
 
 
 def _growth(goal, lost):

@@ -566,3 +566,32 @@ def test_sparse_heat_kernel_reports_its_absolute_time():
     assert np.isclose(info["time"], sig.shape_time(lap, 1e-4), rtol=0) and np.isclose(info["time"], 2e-6, rtol=1e-12)
     K2 = sig.sparse_heat_kernel(lap, info["time"])
     assert (K != K2).nnz == 0
+
+
+def test_sparse_heat_kernel_does_not_depend_on_the_batches_timing(monkeypatch):
+    """Batches in flight at once give the same matrix and bounds whatever their threads' timing
+    (batches finishing in another order, delayed at random), and each batch's calibration is
+    read from the batches collected before it."""
+    import random
+    import time
+
+    from spectral_igl import local
+
+    lap = _exact("sliver")[0]
+    monkeypatch.setattr(local, "BATCH", 48)              # several batches on a small mesh
+    monkeypatch.setattr(local, "FIRST_BATCH", 16)
+    runs = []
+    for seed in (0, 1):
+        rng = random.Random(seed)
+        solve = local._solve_batch
+
+        def slow(*args, solve=solve, rng=rng):
+            time.sleep(rng.uniform(0.0, 0.02))
+            return solve(*args)
+
+        monkeypatch.setattr(local, "_solve_batch", slow)
+        runs.append(sig.sparse_heat_kernel(lap, 1e-4, block=8, return_info=True))
+        monkeypatch.setattr(local, "_solve_batch", solve)
+    (K, info), (K2, info2) = runs
+    assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
+    assert np.array_equal(info["dropped_mass"], info2["dropped_mass"])
