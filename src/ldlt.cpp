@@ -898,33 +898,6 @@ ISA_BODY void chebyshev_block(int64_t b, int K, int w, const I *ip, const I *ix,
     }
 }
 
-template <class I>
-ISA_BODY void chebyshev_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
-                             double *t0, double *W) {
-    for (int64_t b = next++; b < nblocks; b = next++) {
-        switch (w) {
-        case 32: chebyshev_block<32>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-        case 16: chebyshev_block<16>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-        case 8: chebyshev_block<8>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-        case 4: chebyshev_block<4>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W); break;
-        default: chebyshev_block<0>(b, K, w, ip, ix, px, off, C, rows, t1, t0, W);
-        }
-    }
-}
-template <class I>
-ISA_AVX2 void chebyshev_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                             const double *px, const int64_t *off, const double *C, const int64_t *rows, double *t1,
-                             double *t0, double *W) {
-    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
-}
-template <class I>
-ISA_BASELINE void chebyshev_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
-                                     const I *ix, const double *px, const int64_t *off, const double *C,
-                                     const int64_t *rows, double *t1, double *t0, double *W) {
-    chebyshev_body(next, nblocks, K, w, ip, ix, px, off, C, rows, t1, t0, W);
-}
-
 // The Poisson (uniformization) series of spectral_igl.approx.uniformization.uniformize_blocks
 // on the same block-diagonal P: for block b and terms k = 1..K (while rows[k] covers the
 // block), q_k = (P q_{k-1}) * (lam[b] / k) and W += q_k, with q_0 = W's block on entry
@@ -957,30 +930,41 @@ ISA_BODY void poisson_block(int64_t b, int K, int w, const I *ip, const I *ix, c
     }
 }
 
-template <class I>
-ISA_BODY void poisson_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
-                           double *s, double *W) {
+// Kind 0: the Chebyshev series' block (coef = C, u = t1, v = t0); kind 1: the Poisson
+// series' (coef = lam, u = q, v = s). Threads take whole blocks from next; the width's
+// common values get their own specializations.
+template <int Kind, int WC, class I>
+ISA_BODY void series_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                           const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+    if constexpr (Kind == 0) chebyshev_block<WC>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
+    else poisson_block<WC>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
+}
+
+template <int Kind, class I>
+ISA_BODY void series_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                          const double *px, const int64_t *off, const double *coef, const int64_t *rows, double *u,
+                          double *v, double *W) {
     for (int64_t b = next++; b < nblocks; b = next++) {
         switch (w) {
-        case 32: poisson_block<32>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
-        case 16: poisson_block<16>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
-        case 8: poisson_block<8>(b, K, w, ip, ix, px, off, lam, rows, q, s, W); break;
-        default: poisson_block<0>(b, K, w, ip, ix, px, off, lam, rows, q, s, W);
+        case 32: series_block<Kind, 32>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 16: series_block<Kind, 16>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 8: series_block<Kind, 8>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 4: series_block<Kind, 4>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        default: series_block<Kind, 0>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
         }
     }
 }
-template <class I>
-ISA_AVX2 void poisson_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                           const double *px, const int64_t *off, const double *lam, const int64_t *rows, double *q,
-                           double *s, double *W) {
-    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+template <int Kind, class I>
+ISA_AVX2 void series_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
+                          const double *px, const int64_t *off, const double *coef, const int64_t *rows, double *u,
+                          double *v, double *W) {
+    series_body<Kind>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
-template <class I>
-ISA_BASELINE void poisson_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
-                                   const I *ix, const double *px, const int64_t *off, const double *lam,
-                                   const int64_t *rows, double *q, double *s, double *W) {
-    poisson_body(next, nblocks, K, w, ip, ix, px, off, lam, rows, q, s, W);
+template <int Kind, class I>
+ISA_BASELINE void series_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
+                                  const I *ix, const double *px, const int64_t *off, const double *coef,
+                                  const int64_t *rows, double *u, double *v, double *W) {
+    series_body<Kind>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 
 using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
@@ -1037,6 +1021,16 @@ void on_threads(int threads, int64_t nblocks, F body) {
     for (auto &th : pool) th.join();
 }
 
+// The series of kind Kind (series_block) on `threads` threads, in the CPU's clone.
+template <int Kind, class I>
+void run_series(int threads, int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
+                const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
+        if (isa::avx2()) series_avx2<Kind, I>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+        else series_baseline<Kind, I>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+    });
+}
+
 template <class I>
 void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
                       In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
@@ -1045,14 +1039,8 @@ void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64
     check_series<I>(indptr, indices, data, offsets, rows, K, 2, {&t1, &t0, &W}, threads);
     if (K < 2) return;
     const int w = int(t1.shape(1));
-    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
-        if (isa::avx2())
-            chebyshev_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
-                              C.data(), rows.data(), t1.data(), t0.data(), W.data());
-        else
-            chebyshev_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
-                                  C.data(), rows.data(), t1.data(), t0.data(), W.data());
-    });
+    run_series<0, I>(threads, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(), C.data(),
+                     rows.data(), t1.data(), t0.data(), W.data());
 }
 
 template <class I>
@@ -1062,14 +1050,8 @@ void poisson_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t
     if (int64_t(lam.shape(0)) != nblocks) throw std::invalid_argument("lam must have one entry per block");
     check_series<I>(indptr, indices, data, offsets, rows, K, 1, {&q, &s, &W}, threads);
     const int w = int(q.shape(1));
-    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
-        if (isa::avx2())
-            poisson_avx2<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
-                            lam.data(), rows.data(), q.data(), s.data(), W.data());
-        else
-            poisson_baseline<I>(next, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
-                                lam.data(), rows.data(), q.data(), s.data(), W.data());
-    });
+    run_series<1, I>(threads, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+                     lam.data(), rows.data(), q.data(), s.data(), W.data());
 }
 
 // ------------------------------------------------------------------------- regions

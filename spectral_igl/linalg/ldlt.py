@@ -86,6 +86,15 @@ def available() -> bool:
     return True
 
 
+def _csr(M):
+    """(indptr, indices, data) of a csr matrix for the compiled loops: one index type for both
+    (int32 while both fit), contiguous float data."""
+    M = sp.csr_matrix(M)
+    index = np.int32 if M.indices.dtype == np.int32 and M.indptr.dtype == np.int32 else np.int64
+    return (M.indptr.astype(index, copy=False), M.indices.astype(index, copy=False),
+            np.ascontiguousarray(M.data, dtype=float))
+
+
 def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W, threads: int | None = None) -> bool:
     """Terms 2..K of a Chebyshev recurrence on a block-diagonal P, in the compiled loop: at
     term k, on the leading ``rows[k]`` rows, ``t_k = P t_{k-1} - t_{k-2}`` and
@@ -100,12 +109,8 @@ def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W, threads: int
         ext = _ext()
     except ImportError:
         return False
-    P = sp.csr_matrix(P)
-    index = np.int32 if P.indices.dtype == np.int32 and P.indptr.dtype == np.int32 else np.int64
-    ext.chebyshev_series(P.indptr.astype(index, copy=False), P.indices.astype(index, copy=False),
-                         np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
-                         np.ascontiguousarray(C, dtype=float), np.asarray(rows, dtype=np.int64), t1, t0, W,
-                         SERIES_THREADS if threads is None else threads)
+    ext.chebyshev_series(*_csr(P), np.asarray(offsets, dtype=np.int64), np.ascontiguousarray(C, dtype=float),
+                         np.asarray(rows, dtype=np.int64), t1, t0, W, SERIES_THREADS if threads is None else threads)
     return True
 
 
@@ -120,12 +125,9 @@ def poisson_series(P: sp.csr_matrix, offsets, lam, rows, W, threads: int | None 
         ext = _ext()
     except ImportError:
         return False
-    P = sp.csr_matrix(P)
-    index = np.int32 if P.indices.dtype == np.int32 and P.indptr.dtype == np.int32 else np.int64
-    ext.poisson_series(P.indptr.astype(index, copy=False), P.indices.astype(index, copy=False),
-                       np.ascontiguousarray(P.data, dtype=float), np.asarray(offsets, dtype=np.int64),
-                       np.ascontiguousarray(lam, dtype=float), np.asarray(rows, dtype=np.int64),
-                       np.empty_like(W), np.empty_like(W), W, SERIES_THREADS if threads is None else threads)
+    ext.poisson_series(*_csr(P), np.asarray(offsets, dtype=np.int64), np.ascontiguousarray(lam, dtype=float),
+                       np.asarray(rows, dtype=np.int64), np.empty_like(W), np.empty_like(W), W,
+                       SERIES_THREADS if threads is None else threads)
     return True
 
 
@@ -137,10 +139,10 @@ def region_keys(L: sp.csr_matrix, h2, sources, offsets, radii, limits, labels):
         ext = _ext()
     except ImportError:
         return None
-    index = np.int32 if L.indices.dtype == np.int32 and L.indptr.dtype == np.int32 else np.int64
     f64, i64 = (lambda a: np.ascontiguousarray(a, dtype=float)), (lambda a: np.ascontiguousarray(a, dtype=np.int64))
-    return ext.grow_regions(L.indptr.astype(index, copy=False), L.indices.astype(index, copy=False), f64(h2),
-                            i64(sources), i64(offsets), f64(radii), i64(limits), i64(labels))
+    indptr, indices, _ = _csr(L)
+    return ext.grow_regions(indptr, indices, f64(h2), i64(sources), i64(offsets), f64(radii), i64(limits),
+                            i64(labels))
 
 
 
