@@ -17,7 +17,7 @@ from ..laplacian.units import optional_time
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
                                        intrinsic_parts)
-from ..laplacian.points import local_triangles, tufted_delaunay
+from ..laplacian.points import fan_votes, local_triangles, tufted_delaunay
 from ..linalg import factorize, ldlt
 from ..progress import progress_bar
 from .heat_steps import PositiveHeat
@@ -83,11 +83,19 @@ def _polygon_fans(lap: Laplacian):
 #: tangent plane are left out: bridges to a sheet closer than the spacing (homer's limbs)
 #: stand at 60° to 90°, the triangles across a 90° crease (fandisk) at 45°. Measured in
 #: ``benchmarks/geodesic_domains.py``: 40° loses fandisk's creases (4.8% to 6.3% against
-#: 1.5% to 1.9%), homer's error grows from 40° (2.5% to 3.6%) to 60° (3.1% to 4.3%)
-_POINT_MAX_TILT = 55.0
-#: ``step="tufted_cover"``: the default time in squared mean edge lengths of the cover (0.8
-#: to 1.1 measured; 1.0 is above potpourri3d on spot in two of three draws, 0.9 in none)
-_POINT_TIME = 0.9
+#: 1.5% to 1.9%), homer's error grows from 40° (2.5% to 3.6%) to 60° (3.1% to 4.3%); with
+#: the normals of :data:`_POINT_NORMAL_K` and the votes, 55° puts cow behind potpourri3d
+#: in two of seven draws, 60° in none
+_POINT_MAX_TILT = 60.0
+#: ``step="tufted_cover"``: neighbours of the fans' first (PCA) normal. 12 (the cloud
+#: Laplacian's) sees the body through cow's legs and tail; 8 gives them their own plane
+#: (cow 5.08% -> 4.74% mean over seven draws with the votes); 6 and 10 do worse on cow
+_POINT_NORMAL_K = 8
+#: ``step="tufted_cover"``: the default time in mean squared edge lengths of the cover.
+#: The mean square, not the squared mean, so that an unevenly spaced cloud diffuses
+#: further (mean(l²)/mean(l)² is 1.36 on cow, 1.18 on spot, 1.05 on fandisk): 0.75 puts
+#: cow behind potpourri3d in one draw of seven, 0.85 spot in two, 0.8 neither
+_POINT_TIME = 0.8
 
 
 def _point_parts(lap: Laplacian, cover: bool, mollify: float):
@@ -99,27 +107,35 @@ def _point_parts(lap: Laplacian, cover: bool, mollify: float):
     :math:`G^\top \mathrm{diag}(A)\, G` of that soup, the cloud's own mass, and ``h`` the
     soup's mean edge length. ``cover=True``: the same of the intrinsic Delaunay
     triangulation of the tufted cover of those triangles
-    (:func:`~spectral_igl.laplacian.points.tufted_delaunay`, triangles tilted more than
-    :data:`_POINT_MAX_TILT` from their star's plane left out), with half its face areas
-    (the cover has every face twice) and its lumped mass (the cloud's at a point in no
-    triangle). Either stiffness has a 1e-3 share of the cloud's own, so that a point in no
-    triangle stays attached."""
+    (:func:`~spectral_igl.laplacian.points.tufted_delaunay`; the fans' first normals from
+    :data:`_POINT_NORMAL_K` neighbours, triangles tilted more than
+    :data:`_POINT_MAX_TILT` from their star's plane left out), each face's area halved
+    (the cover has every face twice) and weighted by the share of its three points' fans
+    that list it (a face made by a flip: the mean share of the fans' triangles), its lumped mass (the cloud's at a point in no
+    triangle), and ``h`` the root mean square edge length. Either stiffness has a 1e-3
+    share of the cloud's own, so that a point in no triangle stays attached."""
     P, n = lap.data["P"], lap.n
-    T = local_triangles(P, k=lap.data.get("k") if lap.data.get("method") == "delaunay" else 20,
-                        boundary=bool(lap.data.get("boundary", False)),
-                        max_tilt=_POINT_MAX_TILT if cover else None)
-    if cover:
-        l, T = tufted_delaunay(P, T, mollify)
-    else:
+    k = lap.data.get("k") if lap.data.get("method") == "delaunay" else 20
+    boundary = bool(lap.data.get("boundary", False))
+    if not cover:
+        T = local_triangles(P, k=k, boundary=boundary)
         l = edge_lengths(P, T)
+        gx, gy, A = frame_gradients(l)
+        L = (hat_stiffness(gx, gy, A / 3.0, T, n) + 1e-3 * _with_diagonal(lap.L)).tocsr()
+        return gx, gy, A / 3.0, T, L, lap.mass, float(l.mean())
+    fans = local_triangles(P, k=k, boundary=boundary, max_tilt=_POINT_MAX_TILT, normal_k=_POINT_NORMAL_K)
+    l, T = tufted_delaunay(P, fans, mollify)
+    share = fan_votes(fans, T) / 3.0
     gx, gy, A = frame_gradients(l)
-    A = A * (0.5 if cover else 1.0 / 3.0)
+    # a face listed by all three fans around it is surer than one a single fan holds (cow:
+    # 44% of its fans' triangles are in one fan only, where the fans disagree about the
+    # surface); the 1e-3 share of the cloud's stiffness is against these weights
+    mean_share = len(fans) / (3.0 * len(np.unique(np.sort(fans, axis=1), axis=0))) if len(fans) else 1.0
+    A = 0.5 * A * np.where(share > 0, share, mean_share)
     L = (hat_stiffness(gx, gy, A, T, n) + 1e-3 * _with_diagonal(lap.L)).tocsr()
-    mass = lap.mass
-    if cover:
-        mass = np.bincount(T.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
-        mass = np.where(mass > 0, mass, lap.mass)
-    return gx, gy, A, T, L, mass, float(l.mean())
+    mass = np.bincount(T.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
+    mass = np.where(mass > 0, mass, lap.mass)
+    return gx, gy, A, T, L, mass, float(np.sqrt(np.mean(l ** 2)))
 
 
 def _libigl_order(mesh, source, method):
