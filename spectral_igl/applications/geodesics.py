@@ -175,9 +175,12 @@ class HeatGeodesics:
     default on the intrinsic Delaunay triangulation of the tufted cover of the triangles of
     every point's local Delaunay fan (:func:`~spectral_igl.laplacian.points.local_triangles`;
     Sharp and Crane 2020, potpourri3d's construction, on our fans:
-    :func:`~spectral_igl.laplacian.points.tufted_delaunay`), without the triangles that
-    stand more than 55° on their fan's plane (bridges to a sheet closer than the spacing),
-    at :math:`t = 0.9h^2`. With ``step="euler"`` the heat step is the cloud's own
+    :func:`~spectral_igl.laplacian.points.tufted_delaunay`), the fans' first normals from 8
+    neighbours (thin parts, legs and tails, get their own plane), without the triangles that
+    stand more than 60° on their fan's plane (bridges to a sheet closer than the spacing),
+    each face weighted by the share of its points' fans that list it, at
+    :math:`t = 0.8h^2`, :math:`h^2` the mean squared edge length of the cover. With
+    ``step="euler"`` the heat step is the cloud's own
     :math:`(B + tL)^{-1}` and the gradient, divergence and Poisson step use the fans'
     triangles, each with a third of its area (a triangle is in up to three fans). Mean relative error against ``igl.exact_geodesic`` at the
     default t, beside potpourri3d on the same input (``benchmarks/geodesic_domains.py``: 12
@@ -189,27 +192,24 @@ class HeatGeodesics:
     =========================== ================== ==================
     points                      draw 1             draw 2
     =========================== ================== ==================
-    unit sphere, 4,000 random   2.23 / 1.84 / 1.95 2.29 / 1.91 / 2.10
-    spot's vertices             1.87 / 1.79 / 2.01 1.98 / 1.90 / 1.94
-    cow                         6.25 / 6.63 / 6.48 5.70 / 6.09 / 5.72
-    homer                       4.16 / 3.91 / 4.07 3.85 / 3.62 / 3.67
-    rocker-arm                  2.40 / 1.97 / 2.36 2.30 / 1.93 / 2.10
-    fandisk                     2.52 / 1.64 / 3.88 2.60 / 1.72 / 3.32
-    cheburashka                 2.66 / 2.40 / 3.25 2.94 / 2.76 / 3.31
+    unit sphere, 4,000 random   2.23 / 1.78 / 1.95 2.29 / 1.88 / 2.10
+    spot's vertices             1.87 / 1.87 / 2.01 1.98 / 1.90 / 1.94
+    cow                         6.25 / 6.32 / 6.48 5.70 / 5.70 / 5.72
+    homer                       4.16 / 3.86 / 4.07 3.85 / 3.44 / 3.67
+    rocker-arm                  2.40 / 1.81 / 2.36 2.30 / 1.85 / 2.10
+    fandisk                     2.52 / 1.91 / 3.88 2.60 / 1.78 / 3.32
+    cheburashka                 2.66 / 2.31 / 3.25 2.94 / 2.68 / 3.31
     =========================== ================== ==================
 
     ``"euler"`` is behind potpourri3d on three or four clouds of a draw, by up to 14%; the
-    default only on cow (2,903 vertices, the coarsest sampling), in four of the seven draws
-    ``--seed 0`` to ``6`` (by 2.3%, 6.5%, 5.1% and 4.3%). Cow's vertices are spaced
-    unevenly and are few across its legs and tail: 44% of its fans' triangles are listed by
-    one fan only (3% to 28% on the other clouds) and the tilt limit removes 17% of the
-    fans' triangles (at most 7% elsewhere), with them real ones about the legs and hooves,
-    while a larger one lets bridges back in (a fan on the tail reaches the body, 24
-    spacings away along the surface; the benchmark's ``--by-distance`` gives the errors by
-    distance from the source).
-    With Gaussian noise of 0.1 and 0.2 of the median spacing (``--noise``, ``--seed 0``
-    and ``1``, the seven clouds) the default is below potpourri3d in 27 of the 28 cases and
-    behind on cow at 0.1 in one (6.93% against 6.81%).
+    default is at or below it on all seven clouds in all seven draws ``--seed 0`` to ``6``
+    (mean over the draws 4.74% against 4.97% on cow, the coarsest and most unevenly spaced
+    sampling, where it is closest: 5.70% against 5.72% in draw 2), and with Gaussian noise
+    of 0.1 and 0.2 of the median spacing (``--noise``, ``--seed 0`` and ``1``) in all 28
+    cases. On cow the fans disagree (44% of their triangles are listed by one fan only, 3%
+    to 28% on the other clouds), and its tail lies closer to the body than the spacing:
+    the two sources on it drawn (vertices 180 and 211) keep errors of 19.8% and 24.7%
+    (potpourri3d 18.7% and 25.0%), the fans there bridging to the body.
 
     Parameters
     ----------
@@ -220,7 +220,8 @@ class HeatGeodesics:
         :func:`~spectral_igl.laplacian.points.point_cloud_laplacian`).
     t : float, optional
         Diffusion time; default :math:`h^2`, ``h`` the mean edge length (Crane's m = 1);
-        :math:`0.9h^2` on a point cloud's cover, ``h`` the mean edge length of the cover.
+        :math:`0.8h^2` on a point cloud's cover, ``h²`` the mean squared edge length of the
+        cover.
     step : {"euler", "intrinsic_delaunay", "engine", "tufted_cover"}, default "intrinsic_delaunay"
         How the heat is diffused. ``"euler"``: one backward-Euler step
         :math:`(B + tL)^{-1}` with ``lap``. ``"intrinsic_delaunay"``: the same step with
