@@ -288,3 +288,26 @@ def test_point_cloud_objects_and_refusals():
         geodesic_distance(sig.point_cloud_laplacian(P), 0, method="varadhan")
     with pytest.raises(ValueError, match="point cloud"):
         HeatGeodesics(icosphere(2), step="tufted_cover")
+
+
+def test_point_cloud_whose_stars_split_it_is_joined():
+    """camel_b's vertices: its legs hang from the body by mesh edges four spacings long, and
+    the stars of 20 neighbours split the cloud in three (the distances to the legs were inf);
+    the cover's stars then take 30 neighbours, which join it, and the distances to every point
+    are finite, and as far from the exact ones as potpourri3d's (eight sources: 18.1% against
+    18.2%; the two here: 22.8% against potpourri3d's 23.0%)."""
+    import igl
+
+    V, F = read_shared_mesh("camel_b.obj")
+    P = V / np.sqrt(igl.doublearea(V, F).sum() / 2.0)
+    lap = sig.point_cloud_laplacian(P)
+    assert lap.components.max() == 2                     # the cloud's own Laplacian: 3 pieces
+    geo = sig.HeatGeodesics(lap)
+    errors = []
+    for s in (33, 1290):                                 # one on the body, one on a leg
+        d = geo.compute(s)
+        assert np.all(np.isfinite(d))
+        exact = igl.exact_geodesic(P, F, np.array([s]), VT=np.arange(len(P)))
+        m = exact > 1e-9 * exact.max()
+        errors.append(np.mean(np.abs(d[m] - exact[m]) / exact[m]))
+    assert np.mean(errors) < 0.23                     # measured 0.228

@@ -6,7 +6,7 @@ from scipy.spatial import Delaunay
 
 from data_generators import icosphere, sphere_points
 from spectral_igl.laplacian.intrinsic import cotan_elements, intrinsic_cotan_stiffness
-from spectral_igl.laplacian.points import local_triangles, tufted_cover, tufted_delaunay
+from spectral_igl.laplacian.points import fan_votes, local_triangles, tufted_cover, tufted_delaunay
 
 
 def cover_operators(P, T):
@@ -113,3 +113,36 @@ def test_max_tilt_leaves_out_the_triangles_standing_on_a_star():
     assert set(np.unique(Tk)) == set(range(144)) - {spike}
     with pytest.raises(ValueError, match="max_tilt"):
         local_triangles(P, max_tilt=120.0)
+
+
+def lattice(m):
+    i, j = np.meshgrid(np.arange(float(m)), np.arange(float(m)))
+    return np.c_[(i + 0.5 * j).ravel(), (j * np.sqrt(3) / 2).ravel(), np.zeros(m * m)]
+
+
+def test_fan_votes_count_the_fans_that_hold_each_face():
+    m = 9
+    P = lattice(m)
+    T = local_triangles(P, k=12)
+    U = np.unique(np.sort(T, axis=1), axis=0)
+    votes = fan_votes(T, U[:, ::-1])                    # orientation does not matter
+    assert votes.sum() == len(T) and votes.min() >= 1 and votes.max() == 3
+    # on a triangular lattice every fan is the ring of 6 triangles: a triangle whose three
+    # corners are interior points is in all three fans
+    inner = np.zeros(m * m, dtype=bool)
+    inner.reshape(m, m)[1:-1, 1:-1] = True
+    assert np.all(votes[inner[U].all(axis=1)] == 3)
+    # a face no fan holds (as made by a flip) gets 0, an empty soup nothing
+    np.testing.assert_array_equal(fan_votes(T, [[0, 1, m * m - 1], [2, 1, 0]]), [0, 0])
+    np.testing.assert_array_equal(fan_votes(np.zeros((0, 3), dtype=int), U[:2]), [0, 0])
+
+
+def test_normal_k_sets_the_first_normal_only():
+    P = lattice(8)
+    # any normal_k finds a flat cloud's plane: the same fans
+    base = local_triangles(P, k=12)
+    for normal_k in (3, 8, 12):
+        np.testing.assert_array_equal(local_triangles(P, k=12, normal_k=normal_k), base)
+    for bad in (2, True, 8.0):
+        with pytest.raises(ValueError, match="normal_k"):
+            local_triangles(P, normal_k=bad)

@@ -17,7 +17,7 @@ from ..laplacian.units import optional_time
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
                                        intrinsic_parts)
-from ..laplacian.points import local_triangles, tufted_delaunay
+from ..laplacian.points import fan_votes, local_triangles, tufted_delaunay
 from ..linalg import factorize, ldlt
 from ..progress import progress_bar
 from .heat_steps import PositiveHeat
@@ -83,11 +83,50 @@ def _polygon_fans(lap: Laplacian):
 #: tangent plane are left out: bridges to a sheet closer than the spacing (homer's limbs)
 #: stand at 60° to 90°, the triangles across a 90° crease (fandisk) at 45°. Measured in
 #: ``benchmarks/geodesic_domains.py``: 40° loses fandisk's creases (4.8% to 6.3% against
-#: 1.5% to 1.9%), homer's error grows from 40° (2.5% to 3.6%) to 60° (3.1% to 4.3%)
-_POINT_MAX_TILT = 55.0
-#: ``step="tufted_cover"``: the default time in squared mean edge lengths of the cover (0.8
-#: to 1.1 measured; 1.0 is above potpourri3d on spot in two of three draws, 0.9 in none)
-_POINT_TIME = 0.9
+#: 1.5% to 1.9%), homer's error grows from 40° (2.5% to 3.6%) to 60° (3.1% to 4.3%); with
+#: the normals of :data:`_POINT_NORMAL_K` and the votes, 55° puts cow behind potpourri3d
+#: in two of seven draws, 60° in none
+_POINT_MAX_TILT = 60.0
+#: ``step="tufted_cover"``: neighbours of the fans' first (PCA) normal. 12 (the cloud
+#: Laplacian's) sees the body through cow's legs and tail; 8 gives them their own plane
+#: (cow 5.08% -> 4.74% mean over seven draws with the votes); 6 and 10 do worse on cow
+_POINT_NORMAL_K = 8
+#: ``step="tufted_cover"``: the default time in mean squared edge lengths of the cover.
+#: The mean square, not the squared mean, so that an unevenly spaced cloud diffuses
+#: further (mean(l²)/mean(l)² is 1.36 on cow, 1.18 on spot, 1.05 on fandisk): 0.75 puts
+#: cow behind potpourri3d in one draw of seven, 0.85 spot in two, 0.8 neither
+_POINT_TIME = 0.8
+#: ``step="tufted_cover"``: where a cloud's stars and its Laplacian split it into more pieces
+#: than its graph of this many nearest neighbours does, the stars take this many neighbours
+#: (potpourri3d's default). camel_b's vertices: 3 pieces with 20, 1 with 30, and 18.1% error against
+#: potpourri3d's 18.2% (distances to its legs were inf); the seven clouds of
+#: ``benchmarks/geodesic_domains.py`` are one piece and unchanged (30 everywhere loses cow
+#: in one draw of seven and three of four noisy draws)
+_POINT_BRIDGE_K = 30
+
+
+def _pieces(n, T, L=None):
+    """Connected pieces of the n points under the edges of the rows of T (2 or 3 columns),
+    and those of the matrix L if given."""
+    from scipy.sparse.csgraph import connected_components
+
+    T = np.asarray(T, dtype=np.int64)
+    i, j = T.ravel(), np.roll(T, 1, axis=1).ravel()
+    A = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n)).tocsr()
+    if L is not None:
+        A = A + abs(sp.csr_matrix(L))
+    return int(connected_components(A, directed=False)[0])
+
+
+def _nearest(P, k):
+    """(point, neighbour) pairs of each point's k nearest neighbours."""
+    from scipy.spatial import cKDTree
+
+    k = min(k, len(P) - 1)
+    if k < 1:
+        return np.zeros((0, 2), dtype=np.int64)
+    j = cKDTree(P).query(P, k + 1)[1][:, 1:]
+    return np.c_[np.repeat(np.arange(len(P)), k), j.ravel()]
 
 
 def _point_parts(lap: Laplacian, cover: bool, mollify: float):
@@ -99,27 +138,41 @@ def _point_parts(lap: Laplacian, cover: bool, mollify: float):
     :math:`G^\top \mathrm{diag}(A)\, G` of that soup, the cloud's own mass, and ``h`` the
     soup's mean edge length. ``cover=True``: the same of the intrinsic Delaunay
     triangulation of the tufted cover of those triangles
-    (:func:`~spectral_igl.laplacian.points.tufted_delaunay`, triangles tilted more than
-    :data:`_POINT_MAX_TILT` from their star's plane left out), with half its face areas
-    (the cover has every face twice) and its lumped mass (the cloud's at a point in no
-    triangle). Either stiffness has a 1e-3 share of the cloud's own, so that a point in no
-    triangle stays attached."""
+    (:func:`~spectral_igl.laplacian.points.tufted_delaunay`; the fans' first normals from
+    :data:`_POINT_NORMAL_K` neighbours, triangles tilted more than
+    :data:`_POINT_MAX_TILT` from their star's plane left out), each face's area halved
+    (the cover has every face twice) and weighted by the share of its three points' fans
+    that list it (a face made by a flip: the mean share of the fans' triangles), its lumped mass (the cloud's at a point in no
+    triangle), and ``h`` the root mean square edge length. Either stiffness has a 1e-3
+    share of the cloud's own, so that a point in no triangle stays attached."""
     P, n = lap.data["P"], lap.n
-    T = local_triangles(P, k=lap.data.get("k") if lap.data.get("method") == "delaunay" else 20,
-                        boundary=bool(lap.data.get("boundary", False)),
-                        max_tilt=_POINT_MAX_TILT if cover else None)
-    if cover:
-        l, T = tufted_delaunay(P, T, mollify)
-    else:
+    k = lap.data.get("k") if lap.data.get("method") == "delaunay" else 20
+    boundary = bool(lap.data.get("boundary", False))
+    if not cover:
+        T = local_triangles(P, k=k, boundary=boundary)
         l = edge_lengths(P, T)
+        gx, gy, A = frame_gradients(l)
+        L = (hat_stiffness(gx, gy, A / 3.0, T, n) + 1e-3 * _with_diagonal(lap.L)).tocsr()
+        return gx, gy, A / 3.0, T, L, lap.mass, float(l.mean())
+    fans = local_triangles(P, k=k, boundary=boundary, max_tilt=_POINT_MAX_TILT, normal_k=_POINT_NORMAL_K)
+    if k < _POINT_BRIDGE_K and _pieces(n, fans, lap.L) > _pieces(n, _nearest(P, _POINT_BRIDGE_K)):
+        # the stars leave apart what a wider neighbourhood joins: a band sampled more
+        # coarsely than its sides (camel_b's legs hang from the body by edges four spacings
+        # long); the wider stars join it, as potpourri3d's do
+        fans = local_triangles(P, k=_POINT_BRIDGE_K, boundary=boundary, max_tilt=_POINT_MAX_TILT,
+                               normal_k=_POINT_NORMAL_K)
+    l, T = tufted_delaunay(P, fans, mollify)
+    share = fan_votes(fans, T) / 3.0
     gx, gy, A = frame_gradients(l)
-    A = A * (0.5 if cover else 1.0 / 3.0)
+    # a face listed by all three fans around it is surer than one a single fan holds (cow:
+    # 44% of its fans' triangles are in one fan only, where the fans disagree about the
+    # surface); the 1e-3 share of the cloud's stiffness is against these weights
+    mean_share = len(fans) / (3.0 * len(np.unique(np.sort(fans, axis=1), axis=0))) if len(fans) else 1.0
+    A = 0.5 * A * np.where(share > 0, share, mean_share)
     L = (hat_stiffness(gx, gy, A, T, n) + 1e-3 * _with_diagonal(lap.L)).tocsr()
-    mass = lap.mass
-    if cover:
-        mass = np.bincount(T.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
-        mass = np.where(mass > 0, mass, lap.mass)
-    return gx, gy, A, T, L, mass, float(l.mean())
+    mass = np.bincount(T.ravel(), weights=np.repeat(A / 3.0, 3), minlength=n)
+    mass = np.where(mass > 0, mass, lap.mass)
+    return gx, gy, A, T, L, mass, float(np.sqrt(np.mean(l ** 2)))
 
 
 def _libigl_order(mesh, source, method):
@@ -159,9 +212,12 @@ class HeatGeodesics:
     default on the intrinsic Delaunay triangulation of the tufted cover of the triangles of
     every point's local Delaunay fan (:func:`~spectral_igl.laplacian.points.local_triangles`;
     Sharp and Crane 2020, potpourri3d's construction, on our fans:
-    :func:`~spectral_igl.laplacian.points.tufted_delaunay`), without the triangles that
-    stand more than 55° on their fan's plane (bridges to a sheet closer than the spacing),
-    at :math:`t = 0.9h^2`. With ``step="euler"`` the heat step is the cloud's own
+    :func:`~spectral_igl.laplacian.points.tufted_delaunay`), the fans' first normals from 8
+    neighbours (thin parts, legs and tails, get their own plane), without the triangles that
+    stand more than 60° on their fan's plane (bridges to a sheet closer than the spacing),
+    each face weighted by the share of its points' fans that list it, at
+    :math:`t = 0.8h^2`, :math:`h^2` the mean squared edge length of the cover. With
+    ``step="euler"`` the heat step is the cloud's own
     :math:`(B + tL)^{-1}` and the gradient, divergence and Poisson step use the fans'
     triangles, each with a third of its area (a triangle is in up to three fans). Mean relative error against ``igl.exact_geodesic`` at the
     default t, beside potpourri3d on the same input (``benchmarks/geodesic_domains.py``: 12
@@ -173,27 +229,24 @@ class HeatGeodesics:
     =========================== ================== ==================
     points                      draw 1             draw 2
     =========================== ================== ==================
-    unit sphere, 4,000 random   2.23 / 1.84 / 1.95 2.29 / 1.91 / 2.10
-    spot's vertices             1.87 / 1.79 / 2.01 1.98 / 1.90 / 1.94
-    cow                         6.25 / 6.63 / 6.48 5.70 / 6.09 / 5.72
-    homer                       4.16 / 3.91 / 4.07 3.85 / 3.62 / 3.67
-    rocker-arm                  2.40 / 1.97 / 2.36 2.30 / 1.93 / 2.10
-    fandisk                     2.52 / 1.64 / 3.88 2.60 / 1.72 / 3.32
-    cheburashka                 2.66 / 2.40 / 3.25 2.94 / 2.76 / 3.31
+    unit sphere, 4,000 random   2.23 / 1.78 / 1.95 2.29 / 1.88 / 2.10
+    spot's vertices             1.87 / 1.87 / 2.01 1.98 / 1.90 / 1.94
+    cow                         6.25 / 6.32 / 6.48 5.70 / 5.70 / 5.72
+    homer                       4.16 / 3.86 / 4.07 3.85 / 3.44 / 3.67
+    rocker-arm                  2.40 / 1.81 / 2.36 2.30 / 1.85 / 2.10
+    fandisk                     2.52 / 1.91 / 3.88 2.60 / 1.78 / 3.32
+    cheburashka                 2.66 / 2.31 / 3.25 2.94 / 2.68 / 3.31
     =========================== ================== ==================
 
     ``"euler"`` is behind potpourri3d on three or four clouds of a draw, by up to 14%; the
-    default only on cow (2,903 vertices, the coarsest sampling), in four of the seven draws
-    ``--seed 0`` to ``6`` (by 2.3%, 6.5%, 5.1% and 4.3%). Cow's vertices are spaced
-    unevenly and are few across its legs and tail: 44% of its fans' triangles are listed by
-    one fan only (3% to 28% on the other clouds) and the tilt limit removes 17% of the
-    fans' triangles (at most 7% elsewhere), with them real ones about the legs and hooves,
-    while a larger one lets bridges back in (a fan on the tail reaches the body, 24
-    spacings away along the surface; the benchmark's ``--by-distance`` gives the errors by
-    distance from the source).
-    With Gaussian noise of 0.1 and 0.2 of the median spacing (``--noise``, ``--seed 0``
-    and ``1``, the seven clouds) the default is below potpourri3d in 27 of the 28 cases and
-    behind on cow at 0.1 in one (6.93% against 6.81%).
+    default is at or below it on all seven clouds in all seven draws ``--seed 0`` to ``6``
+    (mean over the draws 4.74% against 4.97% on cow, the coarsest and most unevenly spaced
+    sampling, where it is closest: 5.70% against 5.72% in draw 2), and with Gaussian noise
+    of 0.1 and 0.2 of the median spacing (``--noise``, ``--seed 0`` and ``1``) in all 28
+    cases. On cow the fans disagree (44% of their triangles are listed by one fan only, 3%
+    to 28% on the other clouds), and its tail lies closer to the body than the spacing:
+    the two sources on it drawn (vertices 180 and 211) keep errors of 19.8% and 24.7%
+    (potpourri3d 18.7% and 25.0%), the fans there bridging to the body.
 
     Parameters
     ----------
@@ -204,7 +257,8 @@ class HeatGeodesics:
         :func:`~spectral_igl.laplacian.points.point_cloud_laplacian`).
     t : float, optional
         Diffusion time; default :math:`h^2`, ``h`` the mean edge length (Crane's m = 1);
-        :math:`0.9h^2` on a point cloud's cover, ``h`` the mean edge length of the cover.
+        :math:`0.8h^2` on a point cloud's cover, ``h²`` the mean squared edge length of the
+        cover.
     step : {"euler", "intrinsic_delaunay", "engine", "tufted_cover"}, default "intrinsic_delaunay"
         How the heat is diffused. ``"euler"``: one backward-Euler step
         :math:`(B + tL)^{-1}` with ``lap``. ``"intrinsic_delaunay"``: the same step with
@@ -295,6 +349,8 @@ class HeatGeodesics:
         if lap is not None and lap.domain == "points":
             cover = step == "tufted_cover"
             gx, gy, self.A, Fi, Lp, mass, self.h = _point_parts(lap, cover, self.mollify)
+            if cover:   # the cover's stars may join what the cloud's Laplacian leaves apart
+                self._components = pattern_components(Lp)[0]
             self.G = gradient_matrix(gx, gy, Fi, self.n)
             self._hats = (gx, gy, Fi)
             self._dim = 2

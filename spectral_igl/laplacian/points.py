@@ -11,7 +11,7 @@ from ._operator import Laplacian, make_laplacian
 from .intrinsic import edge_lengths, intrinsic_delaunay, mollify as mollify_lengths
 
 __all__ = ["point_cloud_laplacian", "tangent_voronoi_areas", "local_triangles", "tufted_cover",
-           "tufted_delaunay"]
+           "tufted_delaunay", "fan_votes"]
 
 _METHODS = ("delaunay", "belkin", "liu")
 
@@ -452,12 +452,14 @@ def _fan_normals(nb: np.ndarray, Q: np.ndarray, dual: np.ndarray, N: np.ndarray)
     return np.where(good[:, None], S / np.where(good, norm, 1.0)[:, None], N)
 
 
-def _star_plane(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool):
+def _star_plane(P: np.ndarray, rows: np.ndarray, d: np.ndarray, J: np.ndarray, cut_open: bool,
+                normal_k: int = _NORMAL_K):
     """(nb, Q, area, dual, open) of the points ``rows`` among their neighbours ``J`` (r, k):
     the 3-D offsets ``nb`` (r, k, 3), their coordinates ``Q`` (r, k, 2) in the plane of the
-    local Delaunay fan, and :func:`_clip_cells_dual`'s results there (see :func:`_star`)."""
+    local Delaunay fan (first normal from the PCA of the ``normal_k`` nearest), and
+    :func:`_clip_cells_dual`'s results there (see :func:`_star`)."""
     nb = P[J] - P[rows][:, None, :]
-    kn = min(_NORMAL_K, J.shape[1])
+    kn = min(normal_k, J.shape[1])
     c = nb[:, :kn] - nb[:, :kn].mean(axis=1, keepdims=True)
     _, U = np.linalg.eigh(np.einsum("nki,nkj->nij", c, c))
     half = 1.5 * d[:, min(7, d.shape[1] - 1)]
@@ -524,7 +526,8 @@ def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     return make_laplacian(-W, sp.diags(mass).tocsr(), domain="points", data=data)
 
 
-def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | None = None) -> np.ndarray:
+def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | None = None,
+                    normal_k: int = _NORMAL_K) -> np.ndarray:
     r"""The triangles of every point's local Delaunay fan (the stars behind ``"delaunay"``).
 
     For each point :math:`p_i`, its Delaunay neighbours in the tangent plane of
@@ -548,6 +551,11 @@ def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | No
         the sampling's spacing, the star of a point on one takes neighbours on the other,
         and the triangles to them stand steeply on its plane; a triangle that one star
         leaves out is still listed by the stars that hold it flat. Default: keep all.
+    normal_k : int
+        Neighbours of the first (PCA) normal estimate, before the fan's own normal (at
+        least 3; 12, that of :func:`point_cloud_laplacian`, by default). Fewer see less
+        of a nearby sheet across a thin part of the surface (a leg or tail a few
+        spacings wide) and more of the local noise.
 
     Returns
     -------
@@ -571,11 +579,13 @@ def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | No
         max_tilt = as_positive(max_tilt, "max_tilt")
         if max_tilt > 90:
             raise ValueError(f"max_tilt must be an angle in (0, 90] degrees, got {max_tilt}")
+    if isinstance(normal_k, bool) or not isinstance(normal_k, (numbers.Integral, np.integer)) or normal_k < 3:
+        raise ValueError(f"normal_k must be an integer number of neighbours >= 3, got {describe(normal_k)}")
     n = P.shape[0]
     k = min(int(k), n - 1)
     rows = np.arange(n)
     d, J = _knn(cKDTree(P), P, rows, k)
-    nb, Q, _, dual, _ = _star_plane(P, rows, d, J, bool(boundary))
+    nb, Q, _, dual, _ = _star_plane(P, rows, d, J, bool(boundary), int(normal_k))
     ang = np.where(dual > 0, np.arctan2(Q[..., 1], Q[..., 0]), np.inf)
     order = np.argsort(ang, axis=1)
     cnt = (dual > 0).sum(axis=1)
@@ -595,6 +605,42 @@ def local_triangles(P, k: int = 20, boundary: bool = False, max_tilt: float | No
             ok &= flat >= np.cos(np.radians(max_tilt)) * full
         out.append(np.c_[rows[ok], Js[ok, m], Js[rows, b][ok]])
     return np.concatenate(out).astype(np.int64)
+
+
+def fan_votes(T, F) -> np.ndarray:
+    """How many times the triangle soup ``T`` lists each face of ``F``, as a set of three points.
+
+    With ``T`` from :func:`local_triangles`, the number of points' fans (0 to 3) that hold
+    each face of a triangulation ``F`` built from them, e.g. of :func:`tufted_delaunay`
+    (where a face made by an intrinsic flip is in no fan).
+
+    Parameters
+    ----------
+    T : (m, 3) int
+        Triangles, repeated as often as they are listed.
+    F : (M, 3) int
+        Faces on the same points, in any orientation.
+
+    Returns
+    -------
+    (M,) int64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> fan_votes(np.array([[0, 1, 2], [1, 2, 0], [2, 1, 3]]), np.array([[2, 1, 0], [1, 2, 3], [0, 1, 3]])).tolist()
+    [2, 1, 0]
+    """
+    T = np.sort(np.asarray(T, dtype=np.int64).reshape(-1, 3), axis=1)
+    F = np.sort(np.asarray(F, dtype=np.int64).reshape(-1, 3), axis=1)
+    keys, votes = np.unique(T, axis=0, return_counts=True)
+    if not len(keys):
+        return np.zeros(len(F), dtype=np.int64)
+    # rows of the sorted unique keys, compared lexicographically through a structured view
+    row = np.dtype([("a", np.int64), ("b", np.int64), ("c", np.int64)])
+    kv, fv = np.ascontiguousarray(keys).view(row).ravel(), np.ascontiguousarray(F).view(row).ravel()
+    pos = np.minimum(np.searchsorted(kv, fv), len(kv) - 1)
+    return np.where(kv[pos] == fv, votes[pos], 0).astype(np.int64)
 
 
 def tufted_cover(P, T):
