@@ -2,8 +2,9 @@
 
 For each t: :func:`spectral_igl.sparse_heat_kernel` on a shape (unit area), cold (the
 Laplacian's cache cleared), its time as a ratio to one cholespy Cholesky factorization of
-B + tL in the same process (wall and CPU time: the machine may be shared), the stored entries per column, the peak of traced memory
-(``tracemalloc``: numpy and scipy arrays) and the process's peak resident size, the sparse
+B + tL in the same process (wall and CPU time: the machine may be shared), the stored entries per column, the process's peak
+resident size (and with ``--traced`` the peak of traced memory, ``tracemalloc``: numpy and scipy
+arrays, in a second call, since tracing slows the call's threads), the sparse
 products spent; then checks against global reference columns (``heat_kernel``,
 ``"rational"``, tol 1e-12, with its own bound) at a few sources: stored entries outside
 their bound, dropped entries above ``dropped_max``, dropped mass above ``dropped_mass`` (all
@@ -82,6 +83,8 @@ def main(argv=None):
     ap.add_argument("--block", type=int, default=32)
     ap.add_argument("--sources", type=int, default=3)
     ap.add_argument("--no-check", action="store_true", help="skip the reference columns (large n)")
+    ap.add_argument("--traced", action="store_true",
+                    help="also the peak of numpy's traced memory, in a second call (max RSS is of both)")
     ap.add_argument("--distances", action="store_true", help="also time and check sparse_diffusion_distance")
     args = ap.parse_args(argv)
     name, lap = load(args.mesh, args.subdivide)
@@ -98,13 +101,18 @@ def main(argv=None):
         chol = cholesky_seconds(lap, t)
         chol_cpu = (time.process_time() - c0) / 3
         lap.cache.clear()
-        tracemalloc.start()
         t0, c0 = time.perf_counter(), time.process_time()
         K, info = sig.sparse_heat_kernel(lap, t, threshold=args.threshold, block=args.block, return_info=True)
         sec, cpu = time.perf_counter() - t0, time.process_time() - c0
-        peak = tracemalloc.get_traced_memory()[1]
-        tracemalloc.stop()
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20
+        peak = float("nan")
+        if args.traced:                          # apart: tracing slows the batches' threads
+            del K, info
+            lap.cache.clear()
+            tracemalloc.start()
+            K, info = sig.sparse_heat_kernel(lap, t, threshold=args.threshold, block=args.block, return_info=True)
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
         d = K.diagonal()
         rel = info["abs_error"].max(axis=0).toarray()[0] / K.max(axis=0).toarray()[0]
         bad = "not checked" if args.no_check else ", ".join(map(str, check(lap, t, K, info, sources)))
@@ -115,17 +123,15 @@ def main(argv=None):
         del K, info
         if args.distances:
             lap.cache.clear()
-            tracemalloc.start()
             t0, c0 = time.perf_counter(), time.process_time()
             D, dinfo = sig.sparse_diffusion_distance(lap, t, threshold=args.threshold, block=args.block,
                                                      return_info=True)
             sec, cpu = time.perf_counter() - t0, time.process_time() - c0
-            peak = tracemalloc.get_traced_memory()[1]
-            tracemalloc.stop()
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20
             bad = "not checked" if args.no_check else check_distances(lap, t, D, dinfo, sources)
             off = D.data > 0
             print(f"# diffusion distances at t = {t:g}: {sec / chol:.2f} Cholesky ({cpu / chol_cpu:.2f} in CPU "
-                  f"time), {D.nnz / lap.n:.0f} pairs per vertex, traced peak {peak / 2 ** 30:.2f} GB, median "
+                  f"time), {D.nnz / lap.n:.0f} pairs per vertex, max RSS so far {rss:.2f} GB, median "
                   f"bound / distance {np.median(dinfo['abs_error'].data[off] / D.data[off]):.1e}, HKS bound / "
                   f"HKS max {np.max(dinfo['hks_error'] / dinfo['hks']):.1e}, outside bounds: {bad}", flush=True)
             del D, dinfo
