@@ -17,7 +17,7 @@ from ..laplacian.units import optional_time
 from ..laplacian.intrinsic import edge_lengths, normalized_gradient_divergence
 from ..laplacian.intrinsic_fem import (frame_gradients, gradient_matrix, hat_stiffness, intrinsic_operators,
                                        intrinsic_parts)
-from ..laplacian.points import fan_votes, local_triangles, tufted_delaunay
+from ..laplacian.points import JOIN_K, fan_votes, local_triangles, neighbour_pieces, tufted_delaunay
 from ..linalg import factorize, ldlt
 from ..progress import progress_bar
 from .heat_steps import PositiveHeat
@@ -96,13 +96,6 @@ _POINT_NORMAL_K = 8
 #: further (mean(l²)/mean(l)² is 1.36 on cow, 1.18 on spot, 1.05 on fandisk): 0.75 puts
 #: cow behind potpourri3d in one draw of seven, 0.85 spot in two, 0.8 neither
 _POINT_TIME = 0.8
-#: ``step="tufted_cover"``: where a cloud's stars and its Laplacian split it into more pieces
-#: than its graph of this many nearest neighbours does, the stars take this many neighbours
-#: (potpourri3d's default). camel_b's vertices: 3 pieces with 20, 1 with 30, and 18.1% error against
-#: potpourri3d's 18.2% (distances to its legs were inf); the seven clouds of
-#: ``benchmarks/geodesic_domains.py`` are one piece and unchanged (30 everywhere loses cow
-#: in one draw of seven and three of four noisy draws)
-_POINT_BRIDGE_K = 30
 
 
 def _pieces(n, T, L=None):
@@ -116,17 +109,6 @@ def _pieces(n, T, L=None):
     if L is not None:
         A = A + abs(sp.csr_matrix(L))
     return int(connected_components(A, directed=False)[0])
-
-
-def _nearest(P, k):
-    """(point, neighbour) pairs of each point's k nearest neighbours."""
-    from scipy.spatial import cKDTree
-
-    k = min(k, len(P) - 1)
-    if k < 1:
-        return np.zeros((0, 2), dtype=np.int64)
-    j = cKDTree(P).query(P, k + 1)[1][:, 1:]
-    return np.c_[np.repeat(np.arange(len(P)), k), j.ravel()]
 
 
 def _point_parts(lap: Laplacian, cover: bool, mollify: float):
@@ -155,11 +137,11 @@ def _point_parts(lap: Laplacian, cover: bool, mollify: float):
         L = (hat_stiffness(gx, gy, A / 3.0, T, n) + 1e-3 * _with_diagonal(lap.L)).tocsr()
         return gx, gy, A / 3.0, T, L, lap.mass, float(l.mean())
     fans = local_triangles(P, k=k, boundary=boundary, max_tilt=_POINT_MAX_TILT, normal_k=_POINT_NORMAL_K)
-    if k < _POINT_BRIDGE_K and _pieces(n, fans, lap.L) > _pieces(n, _nearest(P, _POINT_BRIDGE_K)):
-        # the stars leave apart what a wider neighbourhood joins: a band sampled more
-        # coarsely than its sides (camel_b's legs hang from the body by edges four spacings
-        # long); the wider stars join it, as potpourri3d's do
-        fans = local_triangles(P, k=_POINT_BRIDGE_K, boundary=boundary, max_tilt=_POINT_MAX_TILT,
+    if k < JOIN_K and _pieces(n, fans, lap.L) > neighbour_pieces(P, JOIN_K):
+        # the stars leave apart what a wider neighbourhood joins (a cloud Laplacian built with
+        # a k of the user's): the cover's stars take JOIN_K neighbours, as potpourri3d's do
+        # (camel_b's vertices: distances to its legs were inf; now 18.1% against 18.2%)
+        fans = local_triangles(P, k=JOIN_K, boundary=boundary, max_tilt=_POINT_MAX_TILT,
                                normal_k=_POINT_NORMAL_K)
     l, T = tufted_delaunay(P, fans, mollify)
     share = fan_votes(fans, T) / 3.0
