@@ -56,7 +56,7 @@ evaluated globally by :func:`~spectral_igl.heat_kernel` (``info["method"]`` then
 from __future__ import annotations
 
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import scipy.sparse as sp
@@ -455,21 +455,18 @@ def _run_batches(ctx, queue, pieces, per):
                 batch.append(queue.popleft())
                 size += batch[-1][0].size
             args = (ctx, batch, ctx["scale"], pieces, per)
-            pending.append(pool.submit(_solve_batch, *args) if pool else _Done(_solve_batch(*args)))
+            pending.append(pool.submit(_solve_batch, *args) if pool else _done(_solve_batch(*args)))
     finally:
         if pool:
             pool.shutdown(cancel_futures=True)
     return products
 
 
-class _Done:
-    """A result already computed, read as a future's."""
-
-    def __init__(self, value):
-        self.value = value
-
-    def result(self):
-        return self.value
+def _done(value):
+    """A future holding a result already computed (the batches run in this thread)."""
+    future = Future()
+    future.set_result(value)
+    return future
 
 
 def _solve_batch(ctx, batch, scale, pieces, per):

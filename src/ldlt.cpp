@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <atomic>
 #include <complex>
 #include <exception>
 #include <cstdint>
@@ -25,7 +24,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -868,8 +866,7 @@ Out<T> to_numpy(std::vector<T> &&v, std::vector<size_t> shape) {
 // 0; q - t0; W += coef * t) rounds it, so the two agree bit for bit and the series' proved
 // rounding bound holds for both. No fused multiply-add: the AVX2 clone is compiled without
 // FMA, and the baseline has none. The blocks are independent, so each runs all its terms
-// while its rows are in cache, and threads take whole blocks from a shared counter: no
-// barrier, and the result does not depend on the number of threads.
+// while its rows are in cache.
 template <int WC, class I>
 ISA_BODY void chebyshev_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
                               const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
@@ -941,10 +938,9 @@ ISA_BODY void series_block(int64_t b, int K, int w, const I *ip, const I *ix, co
 }
 
 template <int Kind, class I>
-ISA_BODY void series_body(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                          const double *px, const int64_t *off, const double *coef, const int64_t *rows, double *u,
-                          double *v, double *W) {
-    for (int64_t b = next++; b < nblocks; b = next++) {
+ISA_BODY void series_body(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
+                          const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+    for (int64_t b = 0; b < nblocks; ++b) {
         switch (w) {
         case 32: series_block<Kind, 32>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
         case 16: series_block<Kind, 16>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
@@ -955,16 +951,15 @@ ISA_BODY void series_body(std::atomic<int64_t> &next, int64_t nblocks, int K, in
     }
 }
 template <int Kind, class I>
-ISA_AVX2 void series_avx2(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip, const I *ix,
-                          const double *px, const int64_t *off, const double *coef, const int64_t *rows, double *u,
-                          double *v, double *W) {
-    series_body<Kind>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+ISA_AVX2 void series_avx2(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
+                          const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+    series_body<Kind>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 template <int Kind, class I>
-ISA_BASELINE void series_baseline(std::atomic<int64_t> &next, int64_t nblocks, int K, int w, const I *ip,
-                                  const I *ix, const double *px, const int64_t *off, const double *coef,
-                                  const int64_t *rows, double *u, double *v, double *W) {
-    series_body<Kind>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+ISA_BASELINE void series_baseline(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
+                                  const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v,
+                                  double *W) {
+    series_body<Kind>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 
 using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
@@ -975,7 +970,7 @@ using Coefs = nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::c
 // and w columns distinct.
 template <class I>
 void check_series(const In1<I> &indptr, const In1<I> &indices, const In1<double> &data, const In1<int64_t> &offsets,
-                  const In1<int64_t> &rows, int64_t K, int first, const std::vector<const Block *> &blocks, int threads) {
+                  const In1<int64_t> &rows, int64_t K, int first, const std::vector<const Block *> &blocks) {
     const int64_t n = int64_t(blocks[0]->shape(0)), w = int64_t(blocks[0]->shape(1));
     const int64_t nblocks = int64_t(offsets.shape(0)) - 1;
     if (nblocks < 0) throw std::invalid_argument("offsets must have at least one entry");
@@ -987,7 +982,6 @@ void check_series(const In1<I> &indptr, const In1<I> &indices, const In1<double>
         for (size_t c = a + 1; c < blocks.size(); ++c)
             if (blocks[a]->data() == blocks[c]->data()) throw std::invalid_argument("the dense blocks must be distinct arrays");
     if (w < 1 || w > (1 << 20) || K > (1 << 24)) throw std::invalid_argument("1 to 2**20 columns, at most 2**24 terms");
-    if (threads < 1) throw std::invalid_argument("threads must be at least 1");
     if (int64_t(indptr.shape(0)) != n + 1) throw std::invalid_argument("indptr must have n + 1 entries");
     const int64_t *off = offsets.data(), *rw = rows.data();
     if (off[0] != 0 || off[nblocks] != n) throw std::invalid_argument("offsets must run from 0 to n");
@@ -1009,48 +1003,35 @@ void check_series(const In1<I> &indptr, const In1<I> &indices, const In1<double>
         }
 }
 
-// Runs body(next) on `threads` threads (at most one per block) without the GIL.
-template <class F>
-void on_threads(int threads, int64_t nblocks, F body) {
-    nb::gil_scoped_release rel;
-    std::atomic<int64_t> next(0);
-    std::vector<std::thread> pool;
-    const int extra = int(std::min<int64_t>(threads, nblocks)) - 1;
-    for (int j = 0; j < extra; ++j) pool.emplace_back([&] { body(next); });
-    body(next);
-    for (auto &th : pool) th.join();
-}
-
-// The series of kind Kind (series_block) on `threads` threads, in the CPU's clone.
+// The series of kind Kind (series_block) without the GIL, in the CPU's clone.
 template <int Kind, class I>
-void run_series(int threads, int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
-                const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
-    on_threads(threads, nblocks, [&](std::atomic<int64_t> &next) {
-        if (isa::avx2()) series_avx2<Kind, I>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
-        else series_baseline<Kind, I>(next, nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
-    });
+void run_series(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
+                const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+    nb::gil_scoped_release rel;
+    if (isa::avx2()) series_avx2<Kind, I>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+    else series_baseline<Kind, I>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 
 template <class I>
 void chebyshev_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, Coefs C,
-                      In1<int64_t> rows, Block t1, Block t0, Block W, int threads) {
+                      In1<int64_t> rows, Block t1, Block t0, Block W) {
     const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(C.shape(1)) - 1;
     if (int64_t(C.shape(0)) != nblocks) throw std::invalid_argument("C must have one row per block");
-    check_series<I>(indptr, indices, data, offsets, rows, K, 2, {&t1, &t0, &W}, threads);
+    check_series<I>(indptr, indices, data, offsets, rows, K, 2, {&t1, &t0, &W});
     if (K < 2) return;
     const int w = int(t1.shape(1));
-    run_series<0, I>(threads, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(), C.data(),
+    run_series<0, I>(nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(), C.data(),
                      rows.data(), t1.data(), t0.data(), W.data());
 }
 
 template <class I>
 void poisson_series(In1<I> indptr, In1<I> indices, In1<double> data, In1<int64_t> offsets, In1<double> lam,
-                    In1<int64_t> rows, Block q, Block s, Block W, int threads) {
+                    In1<int64_t> rows, Block q, Block s, Block W) {
     const int64_t nblocks = int64_t(offsets.shape(0)) - 1, K = int64_t(rows.shape(0)) - 1;
     if (int64_t(lam.shape(0)) != nblocks) throw std::invalid_argument("lam must have one entry per block");
-    check_series<I>(indptr, indices, data, offsets, rows, K, 1, {&q, &s, &W}, threads);
+    check_series<I>(indptr, indices, data, offsets, rows, K, 1, {&q, &s, &W});
     const int w = int(q.shape(1));
-    run_series<1, I>(threads, nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
+    run_series<1, I>(nblocks, int(K), w, indptr.data(), indices.data(), data.data(), offsets.data(),
                      lam.data(), rows.data(), q.data(), s.data(), W.data());
 }
 
@@ -1293,25 +1274,23 @@ NB_MODULE(_ldlt, mod) {
             "another compiler, or SPECTRAL_IGL_BASELINE=1).");
     mod.def("chebyshev_series", &chebyshev_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
-            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            nb::arg("W").noconvert(),
             "Terms 2..K of a Chebyshev recurrence on a block-diagonal CSR P: at term k, on the blocks in rows[:rows[k]], "
             "t_k = P t_{k-1} - t_{k-2} (written over t_{k-2}; the two swap roles each term) and "
             "W += C[block, k] t_k, rounded as the numpy form is (spectral_igl.approx.uniformization."
-            "chebyshev_blocks); t1 and t0 are left as scratch. Blocks go to `threads` threads; the result "
-            "does not depend on their number.");
+            "chebyshev_blocks); t1 and t0 are left as scratch.");
     mod.def("chebyshev_series", &chebyshev_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("C"), nb::arg("rows"), nb::arg("t1").noconvert(), nb::arg("t0").noconvert(),
-            nb::arg("W").noconvert(), nb::arg("threads") = 1);
+            nb::arg("W").noconvert());
     mod.def("poisson_series", &poisson_series<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
-            nb::arg("W").noconvert(), nb::arg("threads") = 1,
+            nb::arg("W").noconvert(),
             "Terms 1..K of a Poisson series on a block-diagonal CSR P, from W's blocks: on the blocks in "
             "rows[:rows[k]], q_k = (P q_{k-1}) * (lam[block] / k) and W += q_k, rounded as the numpy form is "
-            "(spectral_igl.approx.uniformization.uniformize_blocks); q and s are scratch. Blocks go to `threads` "
-            "threads; the result does not depend on their number.");
+            "(spectral_igl.approx.uniformization.uniformize_blocks); q and s are scratch.");
     mod.def("poisson_series", &poisson_series<int64_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("data"),
             nb::arg("offsets"), nb::arg("lam"), nb::arg("rows"), nb::arg("q").noconvert(), nb::arg("s").noconvert(),
-            nb::arg("W").noconvert(), nb::arg("threads") = 1);
+            nb::arg("W").noconvert());
     mod.def("grow_regions", &grow_regions<int32_t>, nb::arg("indptr"), nb::arg("indices"), nb::arg("h2"),
             nb::arg("sources"), nb::arg("offsets"), nb::arg("radii"), nb::arg("limits"), nb::arg("labels"),
             "(keys, region offsets) of spectral_igl.approx.region.grow_regions, group by group.");

@@ -31,15 +31,9 @@ from .._extras import require
 from .threads import blas_threads
 
 __all__ = ["Pattern", "LDLT", "available", "has_metis", "kernel_isa", "nested_dissection", "minimum_degree", "ORDERINGS",
-           "chebyshev_series", "poisson_series", "region_keys", "SERIES_THREADS"]
+           "chebyshev_series", "poisson_series", "region_keys"]
 
 ORDERINGS = ("auto", "nested_dissection", "minimum_degree")
-
-#: threads of the compiled region series (:func:`chebyshev_series`, :func:`poisson_series`) by
-#: default. A batch holds a few regions, so a thread that the system deschedules holds up the
-#: call: on the 43k armadillo with two other processes on 2 cores, the sparse heat kernel at
-#: t = 1e-5 took 11.3 s of wall time with 2 threads against 7.9 s with one
-SERIES_THREADS = 1
 
 #: ``ordering="auto"`` keeps minimum degree while its factorization's flops per stored entry
 #: (the mean width of the updates, small on small surface meshes) stay below this, and
@@ -95,39 +89,36 @@ def _csr(M):
             np.ascontiguousarray(M.data, dtype=float))
 
 
-def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W, threads: int | None = None) -> bool:
+def chebyshev_series(P: sp.csr_matrix, offsets, C, rows, t1, t0, W) -> bool:
     """Terms 2..K of a Chebyshev recurrence on a block-diagonal P, in the compiled loop: at
     term k, on the leading ``rows[k]`` rows, ``t_k = P t_{k-1} - t_{k-2}`` and
     ``W += C[b, k] t_k`` (b the row's block, ``offsets`` the blocks' rows), rounded exactly as
     the numpy form ``q = P @ t1; q - t0; W += c * t`` rounds it (no fused multiply-add), one pass
     over each row instead of four; ``rows[k]`` are block boundaries that never grow. ``W`` is
-    updated in place; ``t1`` and ``t0`` are scratch. Each block runs all its terms at once, on
-    one of ``threads`` threads (default :data:`SERIES_THREADS`) that take whole blocks
-    in turn: no thread waits for another, and the result does not depend on their number.
-    Returns False, having done nothing, when the extension is not available."""
+    updated in place; ``t1`` and ``t0`` are scratch. Each block runs all its terms at once, while
+    its rows are in cache, without the GIL. Returns False, having done nothing, when the extension is not available."""
     try:
         ext = _ext()
     except ImportError:
         return False
     ext.chebyshev_series(*_csr(P), np.asarray(offsets, dtype=np.int64), np.ascontiguousarray(C, dtype=float),
-                         np.asarray(rows, dtype=np.int64), t1, t0, W, SERIES_THREADS if threads is None else threads)
+                         np.asarray(rows, dtype=np.int64), t1, t0, W)
     return True
 
 
-def poisson_series(P: sp.csr_matrix, offsets, lam, rows, W, threads: int | None = None) -> bool:
+def poisson_series(P: sp.csr_matrix, offsets, lam, rows, W) -> bool:
     """Terms 1..K of a Poisson series on a block-diagonal P, in the compiled loop, from W's
     blocks q_0: at term k, on the blocks within the leading ``rows[k]`` rows,
     ``q_k = (P q_{k-1}) * (lam[b] / k)`` and ``W += q_k``, rounded exactly as the numpy form
     ``q = P @ q; q *= lam / k; W += q`` rounds it, one pass over each row, each block's terms at
-    once on one of ``threads`` threads (as :func:`chebyshev_series`). Returns False, having done
-    nothing, when the extension is not available."""
+    once (as :func:`chebyshev_series`). Returns False, having done nothing, when the extension is
+    not available."""
     try:
         ext = _ext()
     except ImportError:
         return False
     ext.poisson_series(*_csr(P), np.asarray(offsets, dtype=np.int64), np.ascontiguousarray(lam, dtype=float),
-                       np.asarray(rows, dtype=np.int64), np.empty_like(W), np.empty_like(W), W,
-                       SERIES_THREADS if threads is None else threads)
+                       np.asarray(rows, dtype=np.int64), np.empty_like(W), np.empty_like(W), W)
     return True
 
 
