@@ -324,3 +324,29 @@ def test_default_stars_join_what_wider_neighbourhoods_join():
     assert sig.point_cloud_laplacian(V, k=20).components.max() == 2
     W, _ = read_shared_mesh("cow.obj")
     assert sig.point_cloud_laplacian(W).data["k"] == 20
+
+
+def test_a_star_without_delaunay_neighbours_keeps_its_first_normal_quietly():
+    """A point whose cut cell keeps no bisector edge (camel_b's vertex 747 with 20 neighbours
+    and boundary=True: its neighbours nearly on a line through it) has no fan: its normal is
+    the PCA one, with no NaN and no warning (the padding angles were inf, and inf - inf)."""
+    import warnings
+
+    from spectral_igl.laplacian import points
+
+    rng = np.random.default_rng(2)
+    nb = rng.standard_normal((3, 6, 3))
+    Q = nb[..., :2]
+    dual = np.ones((3, 6))
+    dual[1] = 0.0                      # the middle star has no Delaunay neighbour
+    N = np.tile([0.0, 0.0, 1.0], (3, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = points._fan_normals(nb, Q, dual, N)
+    assert np.array_equal(out[1], N[1])
+    assert np.allclose(np.linalg.norm(out, axis=1), 1.0)
+    V, F = read_shared_mesh("camel_b.obj")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lap = sig.point_cloud_laplacian(V[np.unique(F)], k=20, boundary=True)
+    assert np.all(np.isfinite(lap.L.data)) and np.all(lap.B.diagonal() > 0)

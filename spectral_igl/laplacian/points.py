@@ -468,7 +468,9 @@ def _fan_normals(nb: np.ndarray, Q: np.ndarray, dual: np.ndarray, N: np.ndarray)
     order = np.argsort(ang, axis=1)
     cnt = (dual > 0).sum(axis=1)
     nbs = np.take_along_axis(nb, order[..., None], axis=1)
-    angs = np.take_along_axis(ang, order, axis=1)
+    # past a row's cnt Delaunay neighbours the angles are padding: 0, not inf (a star
+    # without any, cnt = 0, would otherwise subtract inf from inf)
+    angs = np.where(np.arange(k)[None, :] < cnt[:, None], np.take_along_axis(ang, order, axis=1), 0.0)
     rows = np.arange(n)
     S = np.zeros((n, 3))
     for m in range(k):
