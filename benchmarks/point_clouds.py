@@ -4,13 +4,20 @@
    grid), at two sizes: largest relative error of the first 16 nonzero eigenvalues
    against l(l+1), and nonzeros per row of L.
 2. Vertices of real shapes (unit area) against the spectrum of their own surface: median
-   relative error of the first 20 nonzero eigenvalues (after one zero per connected
+   and largest relative error of the first 20 nonzero eigenvalues (after one zero per connected
    component of each operator). The reference is linear FEM on the mesh midpoint-subdivided
    to at least 40,000 vertices (the same piecewise-linear surface, converged: full and
    lumped mass agree there to 0.02--0.16%); FEM on the unrefined mesh is printed beside it,
    as it is itself several percent off on coarse meshes (suzanne 12%, beetle 7%).
-3. Accuracy against nonzeros: k swept for each method on the random sphere.
-4. One heat-kernel column (``sig.heat_kernel``, tol 1e-8) on the vertices of a mesh with
+3. What the points cannot see (``glued``): seams, where the mesh is cut along a curve whose
+   two sides carry coincident vertices or lie within half an edge (the points sample the
+   surface without the cut), and parts that touch. Median and largest error of the first
+   20 eigenvalues against the mesh; against the mesh welded (coincident vertices merged);
+   and of the default whose stars take only neighbours on their own sheet (a path along
+   mesh edges at most 3 times their straight distance): an oracle no point-cloud operator
+   has, which says how much of an error is surface that the points glue.
+4. Accuracy against nonzeros: k swept for each method on the random sphere.
+5. One heat-kernel column (``sig.heat_kernel``, tol 1e-8) on the vertices of a mesh with
    the point-cloud operator against the same on the mesh, with ``--heat-n`` vertices
    (the mesh is loop-subdivided until it has at least that many).
 
@@ -19,6 +26,7 @@ Usage::
     python benchmarks/point_clouds.py                 # 4k and 16k points, real shapes, 134k heat
     python benchmarks/point_clouds.py --quick         # 2k and 8k, two shapes, no heat timing
     python benchmarks/point_clouds.py --sections shapes --json-dir docs/results   # docs/results/point_clouds.json
+    python benchmarks/point_clouds.py --sections glued                              # what points glue
 """
 from __future__ import annotations
 
@@ -129,30 +137,111 @@ def percent(x):
 
 
 def shapes(names, methods, json_dir=None):
-    print("## vertices of real shapes: median rel. error of the first 20 nonzero eigenvalues against "
+    print("## vertices of real shapes: median / max rel. error of the first 20 nonzero eigenvalues against "
           "the spectrum of the mesh's surface (FEM on the mesh midpoint-subdivided to >= 40k "
           "vertices: ref n, its full-lumped gap); 'mesh' is full-mass FEM on the mesh itself")
     table = Table("point_clouds", ["shape", "vertices", "reference n", "reference full/lumped gap",
                                    "mesh (FEM)", *methods], json_dir)
     for name in names:
-        path = MESHES / name
-        if not path.is_file():
+        if not (MESHES / name).is_file():
             print(f"{name}: not found, skipped")
             continue
-        V, F = read_mesh(path)
-        used = np.unique(F)
-        V, F = V[used], np.searchsorted(used, F)
+        V, F = _unit_shape(name)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            V = V / np.sqrt(sig.laplacian(V, F).area())
             own = sig.laplacian(V, F, weights="cotan", mass="full")
         ref, gap, nr, c = surface_spectrum(V, F)
         cells = [percent(np.median(np.abs(nonzero_eigs(own.L, own.B, 20, c) / ref - 1)))]
-        for m in methods:
-            L, M = operator(V, m)
-            ev = nonzero_eigs(L, M, 20, components(L))
-            cells.append(percent(np.median(np.abs(ev - ref) / ref)))
+        cells += [_errors(*operator(V, m), ref) for m in methods]
         table.add(Path(name).stem, f"{len(V):,}", f"{nr:,}", percent(gap), *cells)
+    table.close()
+
+
+GLUE = 3.0  # a neighbour is on another sheet where the mesh path is longer than this many straight lengths
+
+
+def one_sheet_operator(V, F, k=20, spare=100):
+    """The default operator (``k`` neighbours, closed surface) with each point's star made of
+    its ``k`` nearest neighbours *on its own sheet*: among the ``k + spare`` nearest, those
+    whose shortest path along mesh edges (an upper bound of the geodesic distance) is at most
+    ``GLUE`` times the straight distance come first. An oracle no point cloud has: the mesh
+    tells which points lie across a seam or on a part that touches another."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    from spectral_igl.laplacian.points import _knn, _star
+
+    n = len(V)
+    E = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
+    G = sp.csr_matrix((np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1), (E[:, 0], E[:, 1])), shape=(n, n))
+    rows = np.arange(n)
+    d, J = _knn(cKDTree(V), V, rows, min(k + spare, n - 1))
+    same = np.ones(J.shape, bool)
+    for chunk in np.array_split(rows, max(1, n // 256)):
+        D = dijkstra(G, directed=False, indices=chunk, limit=GLUE * d[chunk].max() * 1.0001)
+        same[chunk] = D[np.arange(len(chunk))[:, None], J[chunk]] <= GLUE * d[chunk]
+    first = np.argsort(~same, axis=1, kind="stable")[:, :k]   # own sheet first, nearest first
+    d, J = np.take_along_axis(d, first, axis=1), np.take_along_axis(J, first, axis=1)
+    _, w, _ = _star(V, rows, d, J, False)
+    nz = w.ravel() > 0
+    W = sp.csr_matrix((w.ravel()[nz], (np.repeat(rows, k)[nz], J.ravel()[nz])), shape=(n, n))
+    W = ((W + W.T) * 0.5).tocoo()
+    mass = 0.25 * np.bincount(W.row, weights=W.data * np.sum((V[W.row] - V[W.col]) ** 2, axis=1), minlength=n)
+    L = sp.diags(np.bincount(W.row, weights=W.data, minlength=n)) - W
+    return L.tocsr(), sp.diags(np.where(mass > 0, mass, mass[mass > 0].mean())).tocsr()
+
+
+def _unit_shape(name):
+    V, F = read_mesh(MESHES / name)
+    used = np.unique(F)
+    V, F = V[used], np.searchsorted(used, F)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return V / np.sqrt(sig.laplacian(V, F).area()), F
+
+
+def _errors(L, M, ref):
+    e = np.abs(nonzero_eigs(L, M, 20, components(L)) / ref - 1)
+    return f"{percent(np.median(e))} / {percent(e.max())}"
+
+
+def welded(V, F, eps):
+    """(V, F) with vertices closer than ``eps`` merged and collapsed faces dropped."""
+    import igl
+
+    W, _, _, G = igl.remove_duplicate_vertices(V, F, eps)
+    G = G[(G[:, 0] != G[:, 1]) & (G[:, 1] != G[:, 2]) & (G[:, 2] != G[:, 0])]
+    used = np.unique(G)
+    return W[used], np.searchsorted(used, G)
+
+
+def glued(names, json_dir=None):
+    from scipy.spatial import cKDTree
+
+    print("## what the points cannot see: seams and touching parts. Median / max error of the first "
+          "20 eigenvalues against the mesh's surface, and against the mesh welded (vertices closer "
+          "than 1e-3 of the median edge merged: the surface its points sample); the default with "
+          f"stars of one sheet (neighbours whose mesh path is <= {GLUE:g}x their distance: an oracle)")
+    table = Table("point_clouds_glued", ["shape", "boundary vertices", "... with a point within h/2",
+                                         "mesh components (welded)", "delaunay", "robust_laplacian",
+                                         "delaunay, welded ref", "robust_laplacian, welded ref",
+                                         "delaunay, stars of one sheet"], json_dir)
+    for name in names:
+        V, F = _unit_shape(name)
+        E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+        edges, count = np.unique(E, axis=0, return_counts=True)
+        boundary = np.zeros(len(V), bool)
+        boundary[edges[count == 1].ravel()] = True
+        h = np.median(np.linalg.norm(V[edges[:, 0]] - V[edges[:, 1]], axis=1))
+        near = cKDTree(V).query(V, 2)[0][:, 1] < 0.5 * h
+        ref, _, _, c = surface_spectrum(V, F)
+        Vw, Fw = welded(V, F, 1e-3 * h)
+        ref_w, _, _, cw = surface_spectrum(Vw, Fw)
+        ops = [operator(V, m) for m in ("delaunay", "robust_laplacian")]
+        cells = [_errors(L, M, r) for r in (ref, ref_w) for L, M in ops]
+        table.add(Path(name).stem, f"{boundary.sum():,}", f"{np.sum(boundary & near):,}", f"{c} ({cw})",
+                  *cells, _errors(*one_sheet_operator(V, F), ref))
     table.close()
 
 
@@ -198,7 +287,7 @@ def heat(n_target, mesh="stanford-bunny.obj"):
         print(f"{name:16s} nnz/row {lap.L.nnz / lap.n:5.1f} build {tb:6.2f} s  heat column {th:6.2f} s", flush=True)
 
 
-SECTIONS = ("spheres", "shapes", "knee", "heat")
+SECTIONS = ("spheres", "shapes", "glued", "knee", "heat")
 
 
 def main(argv=None):
@@ -218,7 +307,10 @@ def main(argv=None):
     if "shapes" in a.sections:
         shapes(["spot.obj", "cow.obj", "fertility.off", "rocker-arm.obj", "cheburashka.obj",
                 "fandisk.obj", "homer.obj", "armadillo.obj", "stanford-bunny.obj", "suzanne.obj",
-                "beetle.obj"], methods[:3], a.json_dir)
+                "beetle.obj", "circle.obj", "camel_b.obj", "teapot.obj", "truck.obj"], methods[:3], a.json_dir)
+    if "glued" in a.sections:
+        glued(["circle.obj", "cow.obj", "homer.obj", "cheburashka.obj", "suzanne.obj", "beetle.obj",
+               "camel_b.obj", "teapot.obj", "truck.obj"], a.json_dir)
     if "knee" in a.sections:
         knee(16000, {"delaunay": [8, 12, 20, 30], "robust_laplacian": [12, 30],
                      "belkin": [16, 32, 64]})

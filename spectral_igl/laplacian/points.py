@@ -304,8 +304,10 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         ``True``, 8.6% -> 4.2% with ``False``. On the vertices of the 11 real shapes of
         ``benchmarks/point_clouds.py`` (median error of 20 eigenvalues against each
         surface's spectrum), ``True`` is better where the mesh has holes or seams
-        (stanford-bunny 1.75% -> 0.76%, beetle 6.1% -> 5.9%) and worse on one-sided
-        closed samplings (cow 6.0% -> 7.5%, rocker-arm 2.8% -> 3.6%).
+        (stanford-bunny 1.75% -> 0.76%, beetle 6.1% -> 5.9%; on circle, a flat disk,
+        5.25% -> 0.169%, its mesh's own cotan Laplacian) and worse on one-sided closed
+        samplings (cow 6.0% -> 7.5%, rocker-arm 2.8% -> 3.6%). No per-point test found
+        tells a rim from those (``docs/results.md``), so the choice is the caller's.
 
     Returns
     -------
@@ -322,13 +324,18 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     0.11% on a Fibonacci sampling, 1.6% -> 0.62% uniformly random, 1.8% -> 0.53% with
     density ratio 3, with 7 nonzeros per row of L (robust_laplacian: 0.67% -> 0.16%,
     6.4% -> 7.6%, 6.5% -> 11%, 7 per row); ``"belkin"`` 10.1% -> 10.2%, 7.2% -> 2.4%,
-    8.7% -> 2.5% with 65--69 per row. On the vertices of 11 real shapes, against the
-    spectrum of each mesh's surface, ``"delaunay"`` is at or below robust_laplacian on
-    10 (0.17% against 4.2% on armadillo, 1.5% against 10.2% on fandisk) and above it on
-    beetle (6.1% against 5.1%), a car body whose panels are cut by seams a third of an
-    edge wide: the points see one surface where the mesh has two free boundaries. Coincident points are allowed (neighbours at
-    distance 0; ``"delaunay"`` gives a coincident pair no weight between them). Points
-    whose neighbourhoods do not connect form separate components.
+    8.7% -> 2.5% with 65--69 per row. On the vertices of 15 real shapes, against the
+    spectrum of each mesh's surface (median / largest error of 20 eigenvalues),
+    ``"delaunay"`` is at or below robust_laplacian in both on 7 (0.17% / 1.5% against
+    4.2% / 11% on armadillo, 1.5% / 4.3% against 10% / 19% on fandisk). Where it is not,
+    the error sits in surface the points do not show (``docs/results.md``): meshes cut
+    along seams whose two sides are coincident or within half an edge (camel_b, teapot,
+    truck, suzanne, beetle: the same points sample the surface without the cut), parts
+    that touch (homer's largest error 90% -> 4.1% and cheburashka's 36% -> 8.2% with each
+    star kept to its own sheet, an oracle; cow's tail, 92% -> 74%, robust_laplacian 52%),
+    and circle, a flat disk, which needs ``boundary=True``. Coincident points are allowed
+    (neighbours at distance 0; ``"delaunay"`` gives a coincident pair no weight between
+    them). Points whose neighbourhoods do not connect form separate components.
 
     Examples
     --------
