@@ -539,12 +539,18 @@ def _knn(tree, P, rows, k):
 def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
     from scipy.spatial import cKDTree
 
-    n = P.shape[0]
-    tree = cKDTree(P)
-    rows = np.arange(n)
-    d, J = _knn(tree, P, rows, k)
+    d, J = _knn(cKDTree(P), P, np.arange(P.shape[0]), k)
     if not np.any(d > 0):
         raise ValueError("all points coincide: there is no tangent plane")
+    return delaunay_from_neighbours(P, d, J, boundary)
+
+
+def delaunay_from_neighbours(P: np.ndarray, d: np.ndarray, J: np.ndarray, boundary: bool = False) -> Laplacian:
+    """``"delaunay"``'s operator with each point's star among the given neighbours: ``J``
+    (n, k) their indices, ``d`` (n, k) their distances, nearest first (what a benchmark's
+    oracle that knows the surface passes in place of the k nearest)."""
+    n, k = J.shape
+    rows = np.arange(n)
     area, w, is_open = _star(P, rows, d, J, boundary)
     r = np.repeat(rows, k)
     nz = w.ravel() > 0
