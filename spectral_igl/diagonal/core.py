@@ -62,7 +62,7 @@ from ..laplacian import as_laplacian, entry_error, lambda_max, lambda_max_kind
 from ..linalg import inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind
 from ..progress import progress_bar
 from .probing import probing_diagonal
-from .selinv import NoSelinv, selinv_kernel, selinv_supported
+from .selinv import NoSelinv, reciprocal_rounding, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal, low_rank, phi_values
 
 __all__ = ["kernel_diagonal", "check_diagonal_options", "column_entry_error", "METHODS", "EXACT_MAX"]
@@ -281,13 +281,6 @@ def heat_projection_applies(lap, filt) -> bool:
     return filt.kind == "heat" and filt.params["t"] * lambda_max(lap) > LARGE_T
 
 
-def _reciprocal_rounding(lap) -> np.ndarray:
-    r"""Per vertex, a bound of :math:`|\mathrm{fl}(1/\hat V_c) - 1/V_c|\,\hat V_c` (the heat's
-    limit 1/V_c at a large t, :math:`V_c = 1_c^\top B 1_c` exactly)."""
-    theta = np.minimum(mass_sum_rounding(lap)[1], 0.5)
-    return (theta / (1.0 - theta) + gamma(1)) * (1.0 + gamma(1))
-
-
 def _exact_cost(G, n: int, dtype) -> float:
     """Estimated seconds of the n engine columns of method="exact", measured on a few.
 
@@ -347,7 +340,7 @@ def _diagonal(lap, filt, method, delta, k, distance, samples, rtol, max_colours,
         minv = inverse_mass_diagonal(lap)
         vol = lap.component_volume()
         if decay * float(np.max(minv * vol)) <= tol:
-            diag, bound = 1.0 / vol, decay * minv + _reciprocal_rounding(lap) / vol
+            diag, bound = 1.0 / vol, decay * minv + reciprocal_rounding(lap) / vol
             if delta == "seed":
                 # m^2 / V: the row sums m_i of B rounded too, and two products
                 row = mass_sum_rounding(lap)[0]

@@ -18,6 +18,7 @@ import logging
 import numpy as np
 
 from ..approx.rational import certifiable
+from ..diagonal.selinv import mixed_heat, reciprocal_rounding
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import MassTraces, inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind, ldlt
 from .fits import as_times, coefficients, family_poles, heat_plan, plan_poles, pole_factorizations
@@ -55,16 +56,24 @@ class MultiDiagonal:
     """
 
     def __init__(self, values, eps, minv, n_factorizations, poles, bound_kind="proof", trace=None,
-                 trace_bound=None):
+                 trace_bound=None, replaced=None):
         self.values, self.eps, self.minv = values, np.asarray(eps, dtype=float), minv
         self.n_factorizations, self.poles = int(n_factorizations), poles
         self.bound_kind = bound_kind
         self.trace, self.trace_bound = trace, trace_bound
+        #: None, or (mask (n, T), bound (n, T)): entries replaced by another value with its own
+        #: bound (the projection of a component where the heat has mixed, :func:`heat_diagonals`)
+        self.replaced = replaced
 
     @property
     def abs_bound(self) -> np.ndarray:
-        r"""(n, T) certified :math:`|G^{(k)}_{ii} - R^{(k)}_{ii}| \le \varepsilon_k (B^{-1})_{ii}`."""
-        return self.minv[:, None] * self.eps[None, :]
+        r"""(n, T) certified :math:`|G^{(k)}_{ii} - R^{(k)}_{ii}| \le \varepsilon_k (B^{-1})_{ii}`
+        (where an entry was replaced, its own bound)."""
+        bound = self.minv[:, None] * self.eps[None, :]
+        if self.replaced is not None:
+            mask, own = self.replaced
+            bound = np.where(mask, own, bound)
+        return bound
 
     @property
     def nbytes(self) -> int:
@@ -214,6 +223,14 @@ def heat_diagonals(lap, times, tol: float = 1e-8) -> MultiDiagonal:
             nf += md.n_factorizations
             pls.append(md.poles)
         minv = inverse_mass_diagonal(lap)
-        return MultiDiagonal(vals[:, inv], eps[inv], minv, nf, pls)
+        # components where the heat has mixed to within a time's eps: the projection 1/V_c
+        mask, own = np.zeros(vals.shape, bool), np.zeros(vals.shape)
+        vol = lap.component_volume()
+        for k, t in enumerate(u):
+            mixed, decay = mixed_heat(lap, float(t), float(eps[k]))
+            vals[mixed, k] = 1.0 / vol[mixed]
+            mask[:, k], own[:, k] = mixed, np.where(mixed, decay * minv + reciprocal_rounding(lap) / vol, 0.0)
+        replaced = (mask[:, inv], own[:, inv]) if mask.any() else None
+        return MultiDiagonal(vals[:, inv], eps[inv], minv, nf, pls, replaced=replaced)
 
     return lap.cache.fetch("diagonal", key, build)
