@@ -71,10 +71,9 @@ def _as_bound(b, m: int) -> np.ndarray:
 
 
 def source_indices(sources, n: int):
-    """(indices, scalar?) for a vertex index or a 1-D array of them."""
-    if isinstance(sources, (numbers.Integral, np.integer)) and not isinstance(sources, (bool, np.bool_)):
-        return np.array([as_index(sources, n, "source")]), True
-    if isinstance(sources, np.ndarray) and sources.ndim == 0:
+    """(indices, scalar?) for a vertex index or a 1-D array of them. A scalar must be an
+    integer (a float such as 5.0 is refused, not read as the array [5])."""
+    if isinstance(sources, (numbers.Number, np.generic)) or (isinstance(sources, np.ndarray) and sources.ndim == 0):
         return np.array([as_index(sources, n, "source")]), True
     return as_indices(sources, n, "sources"), False
 

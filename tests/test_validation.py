@@ -211,3 +211,13 @@ def test_subprocess_ends_in_a_python_exception(case, tmp_path):
     assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])  # a signal gives < 0
     last = proc.stderr.strip().splitlines()[-1]
     assert last.startswith(("ValueError", "TypeError")), last
+
+
+@pytest.mark.parametrize("source", [5.0, np.float64(5.0), np.array(5.0), True])
+def test_a_scalar_source_must_be_an_integer(source):
+    """A float scalar was read as the array [5] (a column of shape (n, 1) instead of (n,));
+    a vertex index is an integer, as the error says."""
+    lap = sig.laplacian(*icosphere(2))
+    with pytest.raises(TypeError, match="source must be an integer vertex index"):
+        sig.heat_kernel(lap, 1e-2, source)
+    assert sig.heat_kernel(lap, 1e-2, np.array([5.0])).shape == (lap.n, 1)   # an array of indices
