@@ -190,8 +190,11 @@ def _distances(lap, rows, cols):
     when the two sets are equal."""
     solver = lap.cache.fetch("factor", ("heat_geodesics",), lambda: HeatGeodesics(lap))
     D = np.empty((rows.size, cols.size))
-    for a in range(0, cols.size, 128):
-        D[:, a:a + 128] = solver.compute_each(cols[a:a + 128])[rows]
+    with warnings.catch_warnings():
+        # distances far below the straight line come back raised to it: the kernel takes them so
+        warnings.filterwarnings("ignore", "the heat method put", RuntimeWarning)
+        for a in range(0, cols.size, 128):
+            D[:, a:a + 128] = solver.compute_each(cols[a:a + 128])[rows]
     if rows.size == cols.size and np.array_equal(rows, cols):
         D = 0.5 * (D + D.T)
         np.fill_diagonal(D, 0.0)
