@@ -393,6 +393,54 @@ def test_chebyshev_regions_against_dense_expm():
     assert work < 0.5 * plain[4]
 
 
+def test_chebyshev_share_costs_a_column_at_most_twice_its_share():
+    """sparse_heat_kernel's allowance (CHEBYSHEV_SHARE of the B-norm target, over the square root
+    of the smallest mass) costs a Chebyshev region's column at most the share of its target
+    through the heat it proves kept, and at most as much again through its entries' bounds:
+    with the lost heat's goal of half the target, the first attempts keep their target."""
+    import scipy.sparse as sp
+    from spectral_igl import local
+    from spectral_igl.approx import region
+    from spectral_igl.approx.region import dirichlet_heat_blocks, grow_regions, vertex_spacing
+
+    assert 0.5 + 2.0 * local.CHEBYSHEV_SHARE < 1.0
+    lap, _, _ = _exact("sliver")
+    t, tol = 2e-4, 1e-8
+    i = 12 * 25 + 12
+    sources = np.array([i, i + 3, i - 25])
+    offsets = np.array([0, 3])
+    keys, roff = grow_regions(sp.csr_matrix(lap.L), vertex_spacing(lap), sources, offsets, np.array([0.12]),
+                              np.full(1, lap.n), lap.components)
+    calls = []
+    chebyshev = region.chebyshev_blocks
+
+    def spy(*args):
+        calls.append(1)
+        return chebyshev(*args)
+
+    region.chebyshev_blocks = spy
+    try:
+        allowance = np.array([local.CHEBYSHEV_SHARE * tol * np.sqrt(lap.mass.min())])
+        u, rel, add, lost, work = dirichlet_heat_blocks(lap, t, keys, roff, sources, offsets, 1e-14,
+                                                        allowance=allowance)
+    finally:
+        region.chebyshev_blocks = chebyshev
+    assert calls
+    L, m = lap.L.toarray(), lap.mass
+    R = keys % lap.n
+    target = tol / np.sqrt(m[sources])
+    G = np.zeros((R.size, sources.size))
+    G[np.searchsorted(R, sources), np.arange(sources.size)] = 1.0 / m[sources]
+    exact = sl.expm(-t * L[np.ix_(R, R)] / m[R][:, None]) @ G
+    full = sl.expm(-t * L / m[:, None]) @ (np.eye(lap.n)[:, sources] / m[sources])
+    outside = m @ full - m[R] @ exact                    # the heat truly outside R
+    # through the kept heat: lost exceeds the heat outside by at most share * target * sqrt(min B)
+    assert np.all(lost[0] - outside <= local.CHEBYSHEV_SHARE * target * np.sqrt(m.min()) + REFERENCE)
+    # through the entries: their bounds' B-norm at most share * target
+    err = rel[0] * u + add
+    assert np.all(np.sqrt(m[R] @ (err * err)) <= local.CHEBYSHEV_SHARE * target * (1.0 + 1e-6))
+
+
 @pytest.mark.parametrize("name, t", [("sliver", 1e-5), ("sliver", 2e-4), ("graded", 2e-6), ("graded", 1e-5)])
 def test_sparse_heat_kernel_with_a_sliver_every_entry(name, t):
     lap, w, X = _exact(name)
