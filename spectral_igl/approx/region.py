@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
 from ..linalg.ldlt import region_keys
-from .uniformization import (abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
+from .uniformization import (_row_sums, abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
                              spectral_top, terms, uniformize, uniformize_blocks)
 
 __all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
@@ -438,7 +438,7 @@ CHEBYSHEV_GAIN = 0.85
 
 
 def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
-    """(is Chebyshev, rates, plans, volumes) of the regions of :func:`dirichlet_heat_blocks`:
+    """(is Chebyshev, rates, plans, volumes, spectral tops) of the regions of :func:`dirichlet_heat_blocks`:
     the blocks whose Chebyshev degree at their B-norm allowance (``allowance`` over the square
     root of the region's mass) is below :data:`CHEBYSHEV_GAIN` of their uniformization terms;
     None when none is."""
@@ -452,12 +452,15 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
         return None
     rates = least.copy()
     # half the proved top of each region's spectrum: the series' interval, so its degree,
-    # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary)
-    rates[try_] = chebyshev_rate(0.5 * spectral_top(stacked, m, region_offsets)[try_])
+    # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary);
+    # the row sums it reads serve abs_radius too
+    sums = _row_sums(stacked, m, region_offsets)
+    top = spectral_top(stacked, m, region_offsets, sums=sums)
+    rates[try_] = chebyshev_rate(0.5 * top[try_])
     volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))
     eps = np.asarray(allowance, dtype=float)[try_] / np.sqrt(volume[try_])
     # each block's rho(|P|) at its rate (the rounding of the products grows with it)
-    omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0))[try_]
+    omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0), sums=sums)[try_]
     degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap), omega)
     use = (degree >= 0) & (degree < CHEBYSHEV_GAIN * poisson[try_])
     if not use.any():
@@ -467,7 +470,7 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
     chosen = [None] * least.size
     for b, p in zip(try_[use].tolist(), [plans[i] for i in np.flatnonzero(use)]):
         chosen[b] = p
-    return mask, rates, chosen, volume
+    return mask, rates, chosen, volume, top
 
 
 def _sub_blocks(M, region_offsets, blocks):
@@ -487,7 +490,7 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
     """:func:`dirichlet_heat_blocks`' series: the chosen blocks by Chebyshev
     (:func:`~.uniformization.chebyshev_blocks`), the others by uniformization, each a proof;
     (u, rel, add, bnorm (g, w) with inf where uniformized, work)."""
-    mask, rates, plans, volume = cheb
+    mask, rates, plans, volume, top = cheb
     u, add = np.empty_like(G), np.empty_like(G)
     rel = np.zeros(mask.size)
     bnorm = np.full((mask.size, G.shape[1]), np.inf)
@@ -498,7 +501,7 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
             continue
         rows, sub, offs = _sub_blocks(stacked, region_offsets, blocks)
         if use:
-            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks], nonnegative=False)
+            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks], nonnegative=False, top=top[blocks])
             u[rows], add[rows], bnorm[blocks], w = chebyshev_blocks(
                 P, rates[blocks], offs, t, G[rows], m[rows], [plans[b] for b in blocks], volume[blocks])
         else:

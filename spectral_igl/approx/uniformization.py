@@ -70,7 +70,7 @@ def rate(lap):
     return lap.cache.fetch("bound", "uniformization", build)
 
 
-def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
+def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True, top=None):
     """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
     and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
     every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R.
@@ -82,7 +82,8 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
     17/16 max_j L_jj / mass_j of its block) is used instead. With ``nonnegative=False`` a given
     ``alpha`` need only be at least half of each block's :func:`spectral_top` (P may then have
     negative diagonal entries, its spectrum in [-1, 1 + drift / alpha]: :func:`chebyshev_blocks`,
-    e.g. with rates from :func:`chebyshev_rate`)."""
+    e.g. with rates from :func:`chebyshev_rate`); ``top``, each block's :func:`spectral_top` when
+    the caller holds it already (the same check, without forming it again)."""
     L = sp.csr_matrix(L, dtype=float)
     d = L.diagonal() / mass
     if offsets is not None:
@@ -91,7 +92,8 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
             alpha = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
         elif nonnegative and not np.all(np.asarray(alpha) >= 1.0625 * np.maximum.reduceat(d, offsets[:-1])):
             raise ValueError("alpha must be at least 17/16 of each block's largest L_jj / mass_j")
-        elif not nonnegative and not np.all(np.asarray(alpha) >= 0.5 * spectral_top(L, mass, offsets)):
+        elif not nonnegative and not np.all(np.asarray(alpha) >= 0.5 * (spectral_top(L, mass, offsets)
+                                                                    if top is None else np.asarray(top))):
             raise ValueError("alpha must be at least half of each block's spectral_top")
         alpha = np.asarray(alpha, dtype=float)
         scale = np.repeat(np.where(alpha > 0, alpha, 1.0), np.diff(offsets))
@@ -106,7 +108,7 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
     return alpha, P
 
 
-def spectral_top(L, mass, offsets=None) -> np.ndarray:
+def spectral_top(L, mass, offsets=None, sums=None) -> np.ndarray:
     r"""Per block of the block-diagonal, symmetric L (``offsets`` as in :func:`rate_matrix`; one
     block when omitted): a proved upper bound of the spectral radius of
     :math:`B^{-1}|L|` (B = diag(``mass``)), so of the largest eigenvalue of :math:`B^{-1}L`.
@@ -116,9 +118,10 @@ def spectral_top(L, mass, offsets=None) -> np.ndarray:
     similar, symmetric :math:`B^{-1/2}|L|B^{-1/2}`), which is well below the first (and
     below twice the largest :math:`L_{ii}/B_{ii}`) where the masses vary. Each term is
     formed with at most 4 roundings and each row summed over at most r terms, so the computed
-    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs.
+    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs. ``sums``: :func:`_row_sums` of
+    the same arguments, when the caller holds them (:func:`abs_radius` reads the same).
     """
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
     start = offsets[:-1]
     top = np.minimum(np.maximum.reduceat(d + off_row, start), np.maximum.reduceat(d + off_sym, start))
     return top * grow
@@ -139,7 +142,7 @@ def _row_sums(L, mass, offsets):
     return offsets, d, off_row, off_sym, (1.0 + _gamma(r + 8)) * (1.0 + 4.0 * U)
 
 
-def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
+def abs_radius(L, mass, offsets, alpha, sums=None) -> np.ndarray:
     r"""Per block (as in :func:`spectral_top`): a proved upper bound of
     :math:`\|\,|P|\,\|_B = \rho(|P|)` for :math:`P = I - B^{-1}L/\alpha_b` (``alpha`` one rate
     per block, at least half its :func:`spectral_top`): :math:`|P|` is self-adjoint in the B
@@ -148,8 +151,8 @@ def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
     neighbours' masses are alike (:func:`chebyshev_blocks`' rounding grows with it).
 
     With :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, :math:`|1 - x_j|` is formed within
-    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top`."""
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top` (``sums`` too)."""
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
     alpha = np.repeat(np.asarray(alpha, dtype=float), np.diff(offsets))
     x = d / alpha
     diag = np.abs(1.0 - x) + 4.0 * U * (1.0 + x)
