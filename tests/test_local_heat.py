@@ -641,3 +641,25 @@ def test_sparse_heat_kernel_does_not_depend_on_the_batches_timing(monkeypatch):
     (K, info), (K2, info2) = runs
     assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
     assert np.array_equal(info["dropped_mass"], info2["dropped_mass"])
+
+
+def test_column_blocks_are_the_column_slices():
+    """sparse_heat_kernel's symmetric assembly reads A's columns block by block with a cursor
+    per row: each block is A[:, a:b] transposed, arrays and all."""
+    import scipy.sparse as sp
+    from spectral_igl.local import _column_block
+
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        n = int(rng.integers(1, 200))
+        A = sp.random(n, n, density=float(rng.uniform(0.0, 0.3)), format="csr", random_state=int(rng.integers(1e9)))
+        A.sort_indices()
+        step = int(rng.integers(1, n + 1))
+        cursor = A.indptr[:-1].astype(np.int64)
+        for a in range(0, n, step):
+            b = min(a + step, n)
+            got, want = _column_block(A, a, b, cursor), sp.csr_matrix(A[:, a:b].T)
+            assert got.shape == want.shape and got.has_canonical_format
+            for x, y in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
+                assert np.array_equal(x, y)
+        assert np.array_equal(cursor, A.indptr[1:])
