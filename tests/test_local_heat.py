@@ -663,3 +663,20 @@ def test_column_blocks_are_the_column_slices():
             for x, y in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
                 assert np.array_equal(x, y)
         assert np.array_equal(cursor, A.indptr[1:])
+
+
+def test_row_scaled_is_scipys_diagonal_product():
+    """rate_matrix scales L's rows without scipy's general product, to the same arrays (entry
+    order, dropped zeros, roundings), so the series sum in the same order."""
+    import scipy.sparse as sp
+    from spectral_igl.approx.uniformization import _row_scaled
+
+    rng = np.random.default_rng(0)
+    mats = [sp.csr_matrix(_exact("icosphere")[0].L)]
+    mats += [sp.random(n, n, density=0.2, format="csr", random_state=n) for n in (1, 7, 60)]
+    for L in mats:
+        a = rng.normal(size=L.shape[0])
+        a[rng.random(L.shape[0]) < 0.2] = 0.0
+        want, got = sp.csr_matrix(sp.diags(a) @ L), _row_scaled(L, a)
+        for x, y in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
+            assert np.array_equal(x, y)

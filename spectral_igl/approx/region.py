@@ -491,6 +491,10 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
     (:func:`~.uniformization.chebyshev_blocks`), the others by uniformization, each a proof;
     (u, rel, add, bnorm (g, w) with inf where uniformized, work)."""
     mask, rates, plans, volume, top = cheb
+    if mask.all():                               # every block by Chebyshev: the stacked operator itself
+        _, P = rate_matrix(stacked, m, region_offsets, alpha=rates, nonnegative=False, top=top)
+        u, add, bnorm, work = chebyshev_blocks(P, rates, region_offsets, t, G, m, plans, volume)
+        return u, np.zeros(mask.size), add, bnorm, work
     u, add = np.empty_like(G), np.empty_like(G)
     rel = np.zeros(mask.size)
     bnorm = np.full((mask.size, G.shape[1]), np.inf)

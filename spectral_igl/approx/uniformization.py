@@ -102,10 +102,30 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True, top=None):
         if not top > 0:
             return 0.0, None
         alpha = scale = 1.0625 * top
-    P = sp.csr_matrix(sp.diags(-1.0 / (mass * scale)) @ L)
+    P = _row_scaled(L, -1.0 / (mass * scale))
     P.setdiag(1.0 - d / scale)
     P.eliminate_zeros()
     return alpha, P
+
+
+def _row_scaled(L, a):
+    """``diags(a) @ L`` of a csr L with no two entries at one place, as scipy's product forms
+    it (each row's entries in the reverse of L's order, exact zeros left out, every entry
+    a_i L_ij rounded once): the same arrays, so the same series' sums, without the general
+    sparse product's pass."""
+    n = L.shape[0]
+    counts = np.diff(L.indptr)
+    rows = np.repeat(np.arange(n), counts)
+    rev = (L.indptr[:-1] + L.indptr[1:] - 1).astype(np.int64)[rows] - np.arange(L.nnz)
+    data = L.data[rev] * a[rows]
+    keep = data != 0
+    if keep.all():
+        indices, indptr = L.indices[rev], L.indptr.copy()
+    else:
+        data, indices = data[keep], L.indices[rev[keep]]
+        indptr = np.zeros(n + 1, dtype=L.indptr.dtype)
+        np.cumsum(np.bincount(rows[keep], minlength=n), out=indptr[1:])
+    return sp.csr_matrix((data, indices, indptr), shape=L.shape)
 
 
 def spectral_top(L, mass, offsets=None, sums=None) -> np.ndarray:
@@ -292,23 +312,23 @@ def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
     return (V[:, 0], err[:, 0]) if one else (V, err)
 
 
-def _leading(P, offsets, need):
-    """head(k) -> (rows, the leading rows x rows of P): the blocks still summing at term k, a
+def _leading(P, offsets, need, K, first):
+    """(rows of terms first..K, head): the rows of the blocks still summing at each term, a
     leading part of the block-diagonal P when the blocks come in decreasing order of their
-    terms ``need`` (its columns are those rows too); all of P otherwise."""
+    terms ``need`` (its columns are those rows too), all of P otherwise; head(rows) is the
+    leading rows x rows of P, formed only when asked (the compiled series reads rows alone)."""
     leading = bool(np.all(np.diff(need) <= 0))
     n = P.shape[0]
+    rows = [int(offsets[np.count_nonzero(need >= k)]) if leading else n for k in range(first, K + 1)]
     heads = {}
 
-    def head(k):
-        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else n
-        if rows not in heads:
-            end = int(P.indptr[rows])
-            heads[rows] = (P if rows == n else
-                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
-        return rows, heads[rows]
+    def head(r):
+        if r not in heads:
+            end = int(P.indptr[r])
+            heads[r] = P if r == n else sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:r + 1]), shape=(r, r))
+        return heads[r]
 
-    return head
+    return rows, head
 
 
 def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = TAIL):
@@ -367,21 +387,20 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     lam = np.array(lams)
     single = alpha.size == 1
     lam_rows = float(lam[0]) if single else np.repeat(lam, counts)[:, None]
-    head = _leading(P, offsets, need)
+    heads, head = _leading(P, offsets, need, K, 1)
 
     V = G.copy()
-    heads = [head(k) for k in range(1, K + 1)]
-    work = s * sum(Pk.nnz for _, Pk in heads)
+    work = s * sum(int(P.indptr[rows]) for rows in heads)
     for _ in range(s):
         # term k, c_k P^k V with c_k = e^-lam lam^k / k!, as (lam / k) P (term k - 1): the same
         # roundings as the coefficient and the products formed apart (module notes)
         q = V * (float(math.exp(-lams[0])) if single else
                  np.repeat([math.exp(-x) for x in lams], counts)[:, None])
         W = np.ascontiguousarray(q)
-        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + [rows for rows, _ in heads], W)):
+        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + heads, W)):
             W = q.copy()
-            for k, (rows, Pk) in enumerate(heads, start=1):
-                q = Pk @ q[:rows]
+            for k, rows in enumerate(heads, start=1):
+                q = head(rows) @ q[:rows]
                 q *= lam_rows / k if single else lam_rows[:rows] / k
                 W[:rows] += q
         V = W
@@ -579,7 +598,7 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
     # X = -P / sigma, the factor -2 / sigma (rounded once) taken into P's entries (rounded once)
     scale = np.repeat([-2.0 / (1.0 + math.ldexp(1.0, -p[1])) for p in plans], counts)
     P = sp.csr_matrix((P.data * np.repeat(scale, np.diff(P.indptr)), P.indices, P.indptr), shape=P.shape)
-    head = _leading(P, offsets, degree)
+    heads, head = _leading(P, offsets, degree, K, 2)
 
     t0 = np.array(G, dtype=float)
     W = np.repeat(C[:, 0], counts)[:, None] * t0
@@ -589,11 +608,10 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
         t1 *= 0.5
         W += np.repeat(C[:, 1], counts)[:, None] * t1
         work += P.nnz
-    heads = [head(k) for k in range(2, K + 1)]
-    work += sum(Pk.nnz for _, Pk in heads)
-    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + [rows for rows, _ in heads], t1, t0, W)):
-        for k, (rows, Pk) in enumerate(heads, start=2):
-            q = Pk @ t1[:rows]
+    work += sum(int(P.indptr[rows]) for rows in heads)
+    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + heads, t1, t0, W)):
+        for k, rows in enumerate(heads, start=2):
+            q = head(rows) @ t1[:rows]
             new = t0[:rows]
             np.subtract(q, new, out=new)          # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
             t0, t1 = t1, t0
