@@ -394,16 +394,25 @@ def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets,
     n = lap.n
     mass = lap.mass if mass is None else mass
     L = sp.csr_matrix(lap.L)
-    group, verts = np.divmod(keys, n)
+    verts = keys % n
     # the regions' principal submatrices of L, stacked: edge (r, j) kept when j is in r's region
     e, j, pos = _edges(L, verts)
-    target = group[e] * n + j
-    at = np.minimum(np.searchsorted(keys, target), keys.size - 1)
-    inside = keys[at] == target
+    # each edge's row in the stack (-1 outside the region), a region at a time through a map of
+    # the vertices (random reads of n entries, not a search of all the batch's keys per edge)
+    at = np.empty(j.size, dtype=np.int64)
+    where = np.full(n, -1, dtype=np.int64)
+    starts = np.searchsorted(e, region_offsets).tolist()
+    bounds = np.asarray(region_offsets).tolist()
+    for g in range(len(bounds) - 1):
+        a, b = bounds[g], bounds[g + 1]
+        where[verts[a:b]] = np.arange(a, b)
+        at[starts[g]:starts[g + 1]] = where[j[starts[g]:starts[g + 1]]]
+        where[verts[a:b]] = -1
+    inside = at >= 0
     indptr = np.zeros(keys.size + 1, dtype=np.int64)
     np.cumsum(np.bincount(e[inside], minlength=keys.size), out=indptr[1:])
     stacked = sp.csr_matrix((L.data[pos[inside]], at[inside], indptr), shape=(keys.size, keys.size))
-    del e, j, pos, target, at, inside
+    del e, j, pos, at, inside, where
     m = mass[verts]
     counts = np.diff(offsets)
     width = int(counts.max())
