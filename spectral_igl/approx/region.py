@@ -257,21 +257,29 @@ def patches(L, size: int):
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     L = sp.csr_matrix(L)
-    taken = np.zeros(L.shape[0], dtype=bool)
+    n = L.shape[0]
+    # rings of a few dozen vertices: Python's sets and lists beat numpy's per-call cost there
+    ptr, ind = L.indptr.tolist(), L.indices.tolist()
+    taken = bytearray(n)
     out = []
-    for seed in reverse_cuthill_mckee(L, symmetric_mode=True):
+    order = reverse_cuthill_mckee(L, symmetric_mode=True)
+    dtype = np.result_type(order.dtype, L.indices.dtype)
+    for seed in order.tolist():
         if taken[seed]:
             continue
-        taken[seed] = True
-        members, frontier, count = [np.array([seed])], np.array([seed]), 1
-        while count < size and frontier.size:
-            j = np.unique(_neighbours(L, frontier)[1])
-            j = j[~taken[j]][:size - count]
-            taken[j] = True
-            members.append(j)
-            count += j.size
+        taken[seed] = 1
+        members, frontier, count = [seed], [seed], 1
+        while count < size and frontier:
+            ring = set()
+            for v in frontier:
+                ring.update(ind[ptr[v]:ptr[v + 1]])
+            j = [w for w in sorted(ring) if not taken[w]][:size - count]
+            for w in j:
+                taken[w] = 1
+            members.extend(j)
+            count += len(j)
             frontier = j
-        out.append(np.sort(np.concatenate(members)))
+        out.append(np.sort(np.array(members, dtype=dtype)))
     return out
 
 
