@@ -468,7 +468,7 @@ def _numpy_series(P, offsets, C, rows, t1, t0, W):
     return W
 
 
-@pytest.mark.parametrize("width", [32, 16, 5, 1])
+@pytest.mark.parametrize("width", [32, 16, 8, 5, 4, 1])
 def test_compiled_chebyshev_series_rounds_as_numpy(width):
     """The compiled recurrence agrees bit for bit with the numpy form whose rounding the
     series' bound is proved for, on blocks that stop at their own terms (leading rows)."""
@@ -506,7 +506,7 @@ def test_compiled_chebyshev_series_rounds_as_numpy(width):
         ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
 
 
-@pytest.mark.parametrize("width", [32, 16, 3])
+@pytest.mark.parametrize("width", [32, 16, 8, 4, 3])
 def test_compiled_poisson_series_rounds_as_numpy(width):
     """The compiled uniformization terms agree bit for bit with their numpy form, on blocks that
     stop at their own terms."""
