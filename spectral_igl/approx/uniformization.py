@@ -200,16 +200,31 @@ def _terms_many(lams, tail):
     K = np.maximum(np.ceil(lams), 1.0)
     out_k, out_tau = np.zeros(lams.size, dtype=np.int64), np.zeros(lams.size)
     todo = np.arange(lams.size)
+    # K runs through k, k + max(1, floor(k / 256)), ...: the next _TERMS_AHEAD of them are
+    # tried at once (the first that meets the tail is the one a try at a time finds)
     while todo.size:
-        lam, k = lams[todo], K[todo]
-        lp = -lam + (k + 1) * np.log(lam) - gammaln(k + 2)
-        lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(np.log(lam)))
-        ok = lt <= log_tail[todo]
-        out_k[todo[ok]] = k[ok]
-        out_tau[todo[ok]] = np.exp(lt[ok])
-        K[todo] = k + np.maximum(1.0, np.floor(k / 256))
-        todo = todo[~ok]
+        k = np.empty((todo.size, _TERMS_AHEAD))
+        k[:, 0] = K[todo]
+        for i in range(1, _TERMS_AHEAD):
+            k[:, i] = k[:, i - 1] + np.maximum(1.0, np.floor(k[:, i - 1] / 256))
+        lam = lams[todo]
+        log_lam = np.log(lam)[:, None]
+        lam = lam[:, None]
+        lp = -lam + (k + 1) * log_lam - gammaln(k + 2)
+        lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(log_lam))
+        ok = lt <= log_tail[todo][:, None]
+        hit = ok.any(axis=1)
+        first = np.argmax(ok, axis=1)[hit]
+        out_k[todo[hit]] = k[hit, first]
+        out_tau[todo[hit]] = np.exp(lt[hit, first])
+        last = k[:, -1]
+        K[todo] = last + np.maximum(1.0, np.floor(last / 256))
+        todo = todo[~hit]
     return out_k, out_tau
+
+
+#: candidate numbers of terms :func:`_terms_many` tries at once
+_TERMS_AHEAD = 32
 
 
 def terms(t: float, alpha: float, tail: float = TAIL) -> int:
