@@ -428,7 +428,11 @@ def filter_logmax(filt, a: float, b: float):
 
     if kind == "heat":
         t = p["t"]
-        return lambda rho: -t * (c - semi(rho)[0])
+
+        def heat_log(rho):
+            return -t * (c - semi(rho)[0])
+        heat_log.elementwise = True     # arithmetic only: an array of radii gives each one's value
+        return heat_log
     if kind == "wave":
         t = p["t"]
         return lambda rho: t * semi(rho)[1]
@@ -474,7 +478,10 @@ def ellipse_tails(logmax, m) -> np.ndarray:
     m = np.asarray(m, dtype=float)
     rhos = 1.0 + np.geomspace(1e-9, 1e3, 300)
     with np.errstate(all="ignore"):
-        L = np.array([float(logmax(rho)) for rho in rhos])
+        if getattr(logmax, "elementwise", False):
+            L = np.asarray(logmax(rhos), dtype=float)
+        else:
+            L = np.array([float(logmax(rho)) for rho in rhos])
     use = np.isfinite(L)
     if not use.any():
         return np.full(m.shape, np.inf)
