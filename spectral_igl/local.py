@@ -389,8 +389,14 @@ FIRST_BATCH = 128
 #: largest stacked series (regions' rows times sources per group) before a batch is split
 STACK_LIMIT = 1 << 24
 #: share of a column's B-norm target its region's Chebyshev series may take (through the heat
-#: it proves kept in the region; :func:`~spectral_igl.approx.region.dirichlet_heat_blocks`)
-CHEBYSHEV_SHARE = 0.02
+#: it proves kept in the region; :func:`~spectral_igl.approx.region.dirichlet_heat_blocks`),
+#: and at most as much again through its entries' bounds (each within eps ||g||_B / sqrt(B_jj),
+#: so sqrt(sum_R B_jj e_j^2) <= sqrt(|R| min B / sum_R B) share * target <= share * target):
+#: with the lost heat's goal of half the target, 0.5 + 2 * 0.2 leaves a first attempt's column
+#: within its target. No bound depends on it (each is proved at whatever eps); at 0.02, 285 of
+#: the 140k bunny's regions fell below the series' rounding floor (about 1.5 times their eps)
+#: and were uniformized instead (tα 50-175: 250-290 terms against 60-90)
+CHEBYSHEV_SHARE = 0.2
 #: stored entries of K per row block of its symmetric assembly
 ASSEMBLY_CHUNK = 1 << 21
 
@@ -654,11 +660,12 @@ def _symmetric(n, pieces):
     _release_freed_memory()                      # the pieces' (small, heap) arrays
     step = max(1, int(n * ASSEMBLY_CHUNK // max(A.nnz, 1)))
     parts = []
+    cursor = A.indptr[:-1].astype(np.int64)      # each row's first entry not yet in a block
     for a in range(0, n, step):
         b = min(a + step, n)
         lo, hi = int(A.indptr[a]), int(A.indptr[b])
         mine = sp.csr_matrix((A.data[lo:hi], A.indices[lo:hi], A.indptr[a:b + 1] - lo), shape=(b - a, n))
-        part = mine.maximum(sp.csr_matrix(A[:, a:b].T))
+        part = mine.maximum(_column_block(A, a, b, cursor))
         # copies: maximum's arrays are views of buffers sized for both operands
         parts.append((np.diff(part.indptr), part.indices.astype(np.int32), part.data.copy()))
         del mine, part
@@ -675,6 +682,35 @@ def _symmetric(n, pieces):
         data[at:at + idx.size] = val
         at += idx.size
     return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
+def _column_block(A, a, b, cursor):
+    """Columns a:b of the csr matrix A (column indices ascending in each row), transposed: the
+    (b - a, n) csr matrix of rows a:b of A^T, the same as ``A[:, a:b].T`` in csr. ``cursor``
+    holds each row's first entry of a column at least a, and is moved to its first of a column
+    at least b: the blocks taken in order read each entry of A once (a slice of A's columns
+    reads all of A's entries), a bisection over each row that has entries in the block."""
+    n, ind, stop = A.shape[0], A.indices, A.indptr[1:]
+    rows = np.flatnonzero(cursor < stop)
+    rows = rows[ind[cursor[rows]] < b]
+    first = cursor[rows]
+    lo, hi = first + 1, stop[rows].astype(np.int64)
+    while True:                                  # the first entry of a column >= b in (first, stop]
+        open_ = np.flatnonzero(lo < hi)
+        if not open_.size:
+            break
+        mid = (lo[open_] + hi[open_]) // 2
+        below = ind[mid] < b
+        lo[open_[below]] = mid[below] + 1
+        hi[open_[~below]] = mid[~below]
+    cursor[rows] = lo
+    counts = lo - first
+    pos = np.repeat(first - (np.cumsum(counts) - counts), counts) + np.arange(int(counts.sum()))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    indptr[rows + 1] = counts
+    np.cumsum(indptr, out=indptr)
+    # A's columns a:b by rows are their transpose by columns
+    return sp.csc_matrix((A.data[pos], ind[pos] - a, indptr), shape=(b - a, n)).tocsr()
 
 
 def _entry_bounds(K, mass, rel, add, lost):

@@ -45,6 +45,7 @@ namespace {
 #define ISA_AVX2 __attribute__((target("avx2"), noinline))
 #define ISA_BASELINE __attribute__((noinline))
 #define ISA_BODY __attribute__((always_inline)) inline
+#define SERIES_VECTORS 1
 namespace isa {
 bool avx2() {
     static const bool yes = [] {
@@ -59,6 +60,7 @@ bool avx2() {
 #define ISA_AVX2
 #define ISA_BASELINE
 #define ISA_BODY inline
+#define SERIES_VECTORS 0
 namespace isa {
 bool avx2() { return false; }
 }  // namespace isa
@@ -927,39 +929,122 @@ ISA_BODY void poisson_block(int64_t b, int K, int w, const I *ip, const I *ix, c
     }
 }
 
+// The same two blocks for the common widths (WC a multiple of 4), their columns held in
+// GCC's vectors of 4 doubles: each row's sums stay in registers over its entries. GCC's own
+// vectorization of the loops above also runs over a row's entries (emulated gathers), which
+// took 3 times as long on these blocks. Every entry is formed by the same operations in the
+// same order (elementwise IEEE multiplies, adds and subtractions, no fused multiply-add), so
+// both forms give the same bits; only the AVX2 clone takes these.
+#if SERIES_VECTORS
+typedef double series_v4 __attribute__((vector_size(32)));
+
+ISA_BODY series_v4 series_load(const double *x) {
+    series_v4 v;
+    __builtin_memcpy(&v, x, sizeof v);
+    return v;
+}
+
+ISA_BODY void series_store(double *x, const series_v4 &v) { __builtin_memcpy(x, &v, sizeof v); }
+
+template <int WC, class I>
+ISA_BODY void chebyshev_block_vec(int64_t b, int K, const I *ip, const I *ix, const double *px, const int64_t *off,
+                                  const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
+    constexpr int NV = WC / 4;
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int k = 2; k <= K && rows[k] >= hi; ++k) {
+        const double ck = C[b * (K + 1) + k];
+        const series_v4 cv = {ck, ck, ck, ck};
+        for (int64_t i = lo; i < hi; ++i) {
+            series_v4 q[NV];
+            for (int v = 0; v < NV; ++v) q[v] = series_v4{0.0, 0.0, 0.0, 0.0};
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const series_v4 av = {a, a, a, a};
+                const double *x = t1 + int64_t(ix[p]) * WC;
+                for (int v = 0; v < NV; ++v) q[v] += av * series_load(x + 4 * v);
+            }
+            double *y = t0 + i * WC, *acc = W + i * WC;
+            for (int v = 0; v < NV; ++v) {
+                const series_v4 t = q[v] - series_load(y + 4 * v);
+                series_store(y + 4 * v, t);
+                series_store(acc + 4 * v, series_load(acc + 4 * v) + cv * t);
+            }
+        }
+        std::swap(t0, t1);
+    }
+}
+
+template <int WC, class I>
+ISA_BODY void poisson_block_vec(int64_t b, int K, const I *ip, const I *ix, const double *px, const int64_t *off,
+                                const double *lam, const int64_t *rows, double *q, double *s, double *W) {
+    constexpr int NV = WC / 4;
+    const int64_t lo = off[b], hi = off[b + 1];
+    for (int64_t i = lo; i < hi; ++i)
+        for (int c = 0; c < WC; ++c) q[i * WC + c] = W[i * WC + c];
+    for (int k = 1; k <= K && rows[k] >= hi; ++k) {
+        const double ck = lam[b] / double(k);
+        const series_v4 cv = {ck, ck, ck, ck};
+        for (int64_t i = lo; i < hi; ++i) {
+            series_v4 y[NV];
+            for (int v = 0; v < NV; ++v) y[v] = series_v4{0.0, 0.0, 0.0, 0.0};
+            for (I p = ip[i]; p < ip[i + 1]; ++p) {
+                const double a = px[p];
+                const series_v4 av = {a, a, a, a};
+                const double *x = q + int64_t(ix[p]) * WC;
+                for (int v = 0; v < NV; ++v) y[v] += av * series_load(x + 4 * v);
+            }
+            double *out = s + i * WC, *acc = W + i * WC;
+            for (int v = 0; v < NV; ++v) {
+                const series_v4 t = y[v] * cv;
+                series_store(out + 4 * v, t);
+                series_store(acc + 4 * v, series_load(acc + 4 * v) + t);
+            }
+        }
+        std::swap(q, s);
+    }
+}
+#endif
+
 // Kind 0: the Chebyshev series' block (coef = C, u = t1, v = t0); kind 1: the Poisson
 // series' (coef = lam, u = q, v = s). Threads take whole blocks from next; the width's
 // common values get their own specializations.
-template <int Kind, int WC, class I>
+template <int Kind, int WC, bool Vec, class I>
 ISA_BODY void series_block(int64_t b, int K, int w, const I *ip, const I *ix, const double *px, const int64_t *off,
                            const double *coef, const int64_t *rows, double *u, double *v, double *W) {
+#if SERIES_VECTORS
+    if constexpr (Vec && WC > 0 && WC % 4 == 0) {
+        if constexpr (Kind == 0) chebyshev_block_vec<WC>(b, K, ip, ix, px, off, coef, rows, u, v, W);
+        else poisson_block_vec<WC>(b, K, ip, ix, px, off, coef, rows, u, v, W);
+        return;
+    }
+#endif
     if constexpr (Kind == 0) chebyshev_block<WC>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
     else poisson_block<WC>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 
-template <int Kind, class I>
+template <int Kind, bool Vec, class I>
 ISA_BODY void series_body(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
                           const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
     for (int64_t b = 0; b < nblocks; ++b) {
         switch (w) {
-        case 32: series_block<Kind, 32>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
-        case 16: series_block<Kind, 16>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
-        case 8: series_block<Kind, 8>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
-        case 4: series_block<Kind, 4>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
-        default: series_block<Kind, 0>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
+        case 32: series_block<Kind, 32, Vec>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 16: series_block<Kind, 16, Vec>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 8: series_block<Kind, 8, Vec>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        case 4: series_block<Kind, 4, Vec>(b, K, w, ip, ix, px, off, coef, rows, u, v, W); break;
+        default: series_block<Kind, 0, Vec>(b, K, w, ip, ix, px, off, coef, rows, u, v, W);
         }
     }
 }
 template <int Kind, class I>
 ISA_AVX2 void series_avx2(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
                           const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v, double *W) {
-    series_body<Kind>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+    series_body<Kind, true>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 template <int Kind, class I>
 ISA_BASELINE void series_baseline(int64_t nblocks, int K, int w, const I *ip, const I *ix, const double *px,
                                   const int64_t *off, const double *coef, const int64_t *rows, double *u, double *v,
                                   double *W) {
-    series_body<Kind>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
+    series_body<Kind, false>(nblocks, K, w, ip, ix, px, off, coef, rows, u, v, W);
 }
 
 using Block = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;

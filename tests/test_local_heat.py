@@ -393,6 +393,54 @@ def test_chebyshev_regions_against_dense_expm():
     assert work < 0.5 * plain[4]
 
 
+def test_chebyshev_share_costs_a_column_at_most_twice_its_share():
+    """sparse_heat_kernel's allowance (CHEBYSHEV_SHARE of the B-norm target, over the square root
+    of the smallest mass) costs a Chebyshev region's column at most the share of its target
+    through the heat it proves kept, and at most as much again through its entries' bounds:
+    with the lost heat's goal of half the target, the first attempts keep their target."""
+    import scipy.sparse as sp
+    from spectral_igl import local
+    from spectral_igl.approx import region
+    from spectral_igl.approx.region import dirichlet_heat_blocks, grow_regions, vertex_spacing
+
+    assert 0.5 + 2.0 * local.CHEBYSHEV_SHARE < 1.0
+    lap, _, _ = _exact("sliver")
+    t, tol = 2e-4, 1e-8
+    i = 12 * 25 + 12
+    sources = np.array([i, i + 3, i - 25])
+    offsets = np.array([0, 3])
+    keys, roff = grow_regions(sp.csr_matrix(lap.L), vertex_spacing(lap), sources, offsets, np.array([0.12]),
+                              np.full(1, lap.n), lap.components)
+    calls = []
+    chebyshev = region.chebyshev_blocks
+
+    def spy(*args):
+        calls.append(1)
+        return chebyshev(*args)
+
+    region.chebyshev_blocks = spy
+    try:
+        allowance = np.array([local.CHEBYSHEV_SHARE * tol * np.sqrt(lap.mass.min())])
+        u, rel, add, lost, work = dirichlet_heat_blocks(lap, t, keys, roff, sources, offsets, 1e-14,
+                                                        allowance=allowance)
+    finally:
+        region.chebyshev_blocks = chebyshev
+    assert calls
+    L, m = lap.L.toarray(), lap.mass
+    R = keys % lap.n
+    target = tol / np.sqrt(m[sources])
+    G = np.zeros((R.size, sources.size))
+    G[np.searchsorted(R, sources), np.arange(sources.size)] = 1.0 / m[sources]
+    exact = sl.expm(-t * L[np.ix_(R, R)] / m[R][:, None]) @ G
+    full = sl.expm(-t * L / m[:, None]) @ (np.eye(lap.n)[:, sources] / m[sources])
+    outside = m @ full - m[R] @ exact                    # the heat truly outside R
+    # through the kept heat: lost exceeds the heat outside by at most share * target * sqrt(min B)
+    assert np.all(lost[0] - outside <= local.CHEBYSHEV_SHARE * target * np.sqrt(m.min()) + REFERENCE)
+    # through the entries: their bounds' B-norm at most share * target
+    err = rel[0] * u + add
+    assert np.all(np.sqrt(m[R] @ (err * err)) <= local.CHEBYSHEV_SHARE * target * (1.0 + 1e-6))
+
+
 @pytest.mark.parametrize("name, t", [("sliver", 1e-5), ("sliver", 2e-4), ("graded", 2e-6), ("graded", 1e-5)])
 def test_sparse_heat_kernel_with_a_sliver_every_entry(name, t):
     lap, w, X = _exact(name)
@@ -420,7 +468,7 @@ def _numpy_series(P, offsets, C, rows, t1, t0, W):
     return W
 
 
-@pytest.mark.parametrize("width", [32, 16, 5, 1])
+@pytest.mark.parametrize("width", [32, 16, 8, 5, 4, 1])
 def test_compiled_chebyshev_series_rounds_as_numpy(width):
     """The compiled recurrence agrees bit for bit with the numpy form whose rounding the
     series' bound is proved for, on blocks that stop at their own terms (leading rows)."""
@@ -458,7 +506,7 @@ def test_compiled_chebyshev_series_rounds_as_numpy(width):
         ldlt.chebyshev_series(P, offsets, C, rows, t1, t0[:-1], W)
 
 
-@pytest.mark.parametrize("width", [32, 16, 3])
+@pytest.mark.parametrize("width", [32, 16, 8, 4, 3])
 def test_compiled_poisson_series_rounds_as_numpy(width):
     """The compiled uniformization terms agree bit for bit with their numpy form, on blocks that
     stop at their own terms."""
@@ -593,3 +641,42 @@ def test_sparse_heat_kernel_does_not_depend_on_the_batches_timing(monkeypatch):
     (K, info), (K2, info2) = runs
     assert (K != K2).nnz == 0 and (info["abs_error"] != info2["abs_error"]).nnz == 0
     assert np.array_equal(info["dropped_mass"], info2["dropped_mass"])
+
+
+def test_column_blocks_are_the_column_slices():
+    """sparse_heat_kernel's symmetric assembly reads A's columns block by block with a cursor
+    per row: each block is A[:, a:b] transposed, arrays and all."""
+    import scipy.sparse as sp
+    from spectral_igl.local import _column_block
+
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        n = int(rng.integers(1, 200))
+        A = sp.random(n, n, density=float(rng.uniform(0.0, 0.3)), format="csr", random_state=int(rng.integers(1e9)))
+        A.sort_indices()
+        step = int(rng.integers(1, n + 1))
+        cursor = A.indptr[:-1].astype(np.int64)
+        for a in range(0, n, step):
+            b = min(a + step, n)
+            got, want = _column_block(A, a, b, cursor), sp.csr_matrix(A[:, a:b].T)
+            assert got.shape == want.shape and got.has_canonical_format
+            for x, y in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
+                assert np.array_equal(x, y)
+        assert np.array_equal(cursor, A.indptr[1:])
+
+
+def test_row_scaled_is_scipys_diagonal_product():
+    """rate_matrix scales L's rows without scipy's general product, to the same arrays (entry
+    order, dropped zeros, roundings), so the series sum in the same order."""
+    import scipy.sparse as sp
+    from spectral_igl.approx.uniformization import _row_scaled
+
+    rng = np.random.default_rng(0)
+    mats = [sp.csr_matrix(_exact("icosphere")[0].L)]
+    mats += [sp.random(n, n, density=0.2, format="csr", random_state=n) for n in (1, 7, 60)]
+    for L in mats:
+        a = rng.normal(size=L.shape[0])
+        a[rng.random(L.shape[0]) < 0.2] = 0.0
+        want, got = sp.csr_matrix(sp.diags(a) @ L), _row_scaled(L, a)
+        for x, y in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
+            assert np.array_equal(x, y)

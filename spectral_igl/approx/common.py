@@ -428,7 +428,11 @@ def filter_logmax(filt, a: float, b: float):
 
     if kind == "heat":
         t = p["t"]
-        return lambda rho: -t * (c - semi(rho)[0])
+
+        def heat_log(rho):
+            return -t * (c - semi(rho)[0])
+        heat_log.elementwise = True     # arithmetic only: an array of radii gives each one's value
+        return heat_log
     if kind == "wave":
         t = p["t"]
         return lambda rho: t * semi(rho)[1]
@@ -472,13 +476,20 @@ def ellipse_tails(logmax, m) -> np.ndarray:
     :math:`2M(\rho)\rho^{-m}/(\rho - 1)`; minimised over a grid of ρ.
     """
     m = np.asarray(m, dtype=float)
-    best = np.full(m.shape, np.inf)
-    for rho in 1.0 + np.geomspace(1e-9, 1e3, 300):
-        with np.errstate(all="ignore"):
-            L = float(logmax(rho))
-            if not np.isfinite(L):
-                continue
-            best = np.minimum(best, np.log(2.0) + L - m * np.log(rho) - np.log(rho - 1.0))
+    rhos = 1.0 + np.geomspace(1e-9, 1e3, 300)
+    with np.errstate(all="ignore"):
+        if getattr(logmax, "elementwise", False):
+            L = np.asarray(logmax(rhos), dtype=float)
+        else:
+            L = np.array([float(logmax(rho)) for rho in rhos])
+    use = np.isfinite(L)
+    if not use.any():
+        return np.full(m.shape, np.inf)
+    # every rho's bound at every m at once: the same operations on the same numbers, so the
+    # same minimum as one rho at a time
+    L, lr, lr1 = L[use][:, None], np.log(rhos[use])[:, None], np.log(rhos[use] - 1.0)[:, None]
+    with np.errstate(all="ignore"):
+        best = np.min(np.log(2.0) + L - m.reshape(1, -1) * lr - lr1, axis=0).reshape(m.shape)
     with np.errstate(over="ignore"):
         return np.exp(best)
 

@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
 from ..linalg.ldlt import region_keys
-from .uniformization import (abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
+from .uniformization import (_row_sums, abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
                              spectral_top, terms, uniformize, uniformize_blocks)
 
 __all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
@@ -257,21 +257,29 @@ def patches(L, size: int):
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     L = sp.csr_matrix(L)
-    taken = np.zeros(L.shape[0], dtype=bool)
+    n = L.shape[0]
+    # rings of a few dozen vertices: Python's sets and lists beat numpy's per-call cost there
+    ptr, ind = L.indptr.tolist(), L.indices.tolist()
+    taken = bytearray(n)
     out = []
-    for seed in reverse_cuthill_mckee(L, symmetric_mode=True):
+    order = reverse_cuthill_mckee(L, symmetric_mode=True)
+    dtype = np.result_type(order.dtype, L.indices.dtype)
+    for seed in order.tolist():
         if taken[seed]:
             continue
-        taken[seed] = True
-        members, frontier, count = [np.array([seed])], np.array([seed]), 1
-        while count < size and frontier.size:
-            j = np.unique(_neighbours(L, frontier)[1])
-            j = j[~taken[j]][:size - count]
-            taken[j] = True
-            members.append(j)
-            count += j.size
+        taken[seed] = 1
+        members, frontier, count = [seed], [seed], 1
+        while count < size and frontier:
+            ring = set()
+            for v in frontier:
+                ring.update(ind[ptr[v]:ptr[v + 1]])
+            j = [w for w in sorted(ring) if not taken[w]][:size - count]
+            for w in j:
+                taken[w] = 1
+            members.extend(j)
+            count += len(j)
             frontier = j
-        out.append(np.sort(np.concatenate(members)))
+        out.append(np.sort(np.array(members, dtype=dtype)))
     return out
 
 
@@ -394,16 +402,25 @@ def dirichlet_heat_blocks(lap, t: float, keys, region_offsets, sources, offsets,
     n = lap.n
     mass = lap.mass if mass is None else mass
     L = sp.csr_matrix(lap.L)
-    group, verts = np.divmod(keys, n)
+    verts = keys % n
     # the regions' principal submatrices of L, stacked: edge (r, j) kept when j is in r's region
     e, j, pos = _edges(L, verts)
-    target = group[e] * n + j
-    at = np.minimum(np.searchsorted(keys, target), keys.size - 1)
-    inside = keys[at] == target
+    # each edge's row in the stack (-1 outside the region), a region at a time through a map of
+    # the vertices (random reads of n entries, not a search of all the batch's keys per edge)
+    at = np.empty(j.size, dtype=np.int64)
+    where = np.full(n, -1, dtype=np.int64)
+    starts = np.searchsorted(e, region_offsets).tolist()
+    bounds = np.asarray(region_offsets).tolist()
+    for g in range(len(bounds) - 1):
+        a, b = bounds[g], bounds[g + 1]
+        where[verts[a:b]] = np.arange(a, b)
+        at[starts[g]:starts[g + 1]] = where[j[starts[g]:starts[g + 1]]]
+        where[verts[a:b]] = -1
+    inside = at >= 0
     indptr = np.zeros(keys.size + 1, dtype=np.int64)
     np.cumsum(np.bincount(e[inside], minlength=keys.size), out=indptr[1:])
     stacked = sp.csr_matrix((L.data[pos[inside]], at[inside], indptr), shape=(keys.size, keys.size))
-    del e, j, pos, target, at, inside
+    del e, j, pos, at, inside, where
     m = mass[verts]
     counts = np.diff(offsets)
     width = int(counts.max())
@@ -438,7 +455,7 @@ CHEBYSHEV_GAIN = 0.85
 
 
 def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
-    """(is Chebyshev, rates, plans, volumes) of the regions of :func:`dirichlet_heat_blocks`:
+    """(is Chebyshev, rates, plans, volumes, spectral tops) of the regions of :func:`dirichlet_heat_blocks`:
     the blocks whose Chebyshev degree at their B-norm allowance (``allowance`` over the square
     root of the region's mass) is below :data:`CHEBYSHEV_GAIN` of their uniformization terms;
     None when none is."""
@@ -452,12 +469,15 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
         return None
     rates = least.copy()
     # half the proved top of each region's spectrum: the series' interval, so its degree,
-    # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary)
-    rates[try_] = chebyshev_rate(0.5 * spectral_top(stacked, m, region_offsets)[try_])
+    # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary);
+    # the row sums it reads serve abs_radius too
+    sums = _row_sums(stacked, m, region_offsets)
+    top = spectral_top(stacked, m, region_offsets, sums=sums)
+    rates[try_] = chebyshev_rate(0.5 * top[try_])
     volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))
     eps = np.asarray(allowance, dtype=float)[try_] / np.sqrt(volume[try_])
     # each block's rho(|P|) at its rate (the rounding of the products grows with it)
-    omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0))[try_]
+    omega = abs_radius(stacked, m, region_offsets, np.where(rates > 0, rates, 1.0), sums=sums)[try_]
     degree, plans = chebyshev_terms(stacked, rates[try_], t, eps, heat_drift(lap), omega)
     use = (degree >= 0) & (degree < CHEBYSHEV_GAIN * poisson[try_])
     if not use.any():
@@ -467,7 +487,7 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
     chosen = [None] * least.size
     for b, p in zip(try_[use].tolist(), [plans[i] for i in np.flatnonzero(use)]):
         chosen[b] = p
-    return mask, rates, chosen, volume
+    return mask, rates, chosen, volume, top
 
 
 def _sub_blocks(M, region_offsets, blocks):
@@ -487,7 +507,11 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
     """:func:`dirichlet_heat_blocks`' series: the chosen blocks by Chebyshev
     (:func:`~.uniformization.chebyshev_blocks`), the others by uniformization, each a proof;
     (u, rel, add, bnorm (g, w) with inf where uniformized, work)."""
-    mask, rates, plans, volume = cheb
+    mask, rates, plans, volume, top = cheb
+    if mask.all():                               # every block by Chebyshev: the stacked operator itself
+        _, P = rate_matrix(stacked, m, region_offsets, alpha=rates, nonnegative=False, top=top)
+        u, add, bnorm, work = chebyshev_blocks(P, rates, region_offsets, t, G, m, plans, volume)
+        return u, np.zeros(mask.size), add, bnorm, work
     u, add = np.empty_like(G), np.empty_like(G)
     rel = np.zeros(mask.size)
     bnorm = np.full((mask.size, G.shape[1]), np.inf)
@@ -498,7 +522,7 @@ def _mixed_blocks(t, stacked, m, region_offsets, G, tail, cheb):
             continue
         rows, sub, offs = _sub_blocks(stacked, region_offsets, blocks)
         if use:
-            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks], nonnegative=False)
+            _, P = rate_matrix(sub, m[rows], offs, alpha=rates[blocks], nonnegative=False, top=top[blocks])
             u[rows], add[rows], bnorm[blocks], w = chebyshev_blocks(
                 P, rates[blocks], offs, t, G[rows], m[rows], [plans[b] for b in blocks], volume[blocks])
         else:

@@ -70,7 +70,7 @@ def rate(lap):
     return lap.cache.fetch("bound", "uniformization", build)
 
 
-def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
+def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True, top=None):
     """(alpha, P) of the stiffness L and lumped mass ``mass``: alpha = 17/16 max_j L_jj / mass_j
     and P = I - diag(mass)^-1 L / alpha, rounded as the module notes assume; (0, None) when
     every L_jj is 0. For a principal submatrix L_RR this is the Dirichlet operator of R.
@@ -82,7 +82,8 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
     17/16 max_j L_jj / mass_j of its block) is used instead. With ``nonnegative=False`` a given
     ``alpha`` need only be at least half of each block's :func:`spectral_top` (P may then have
     negative diagonal entries, its spectrum in [-1, 1 + drift / alpha]: :func:`chebyshev_blocks`,
-    e.g. with rates from :func:`chebyshev_rate`)."""
+    e.g. with rates from :func:`chebyshev_rate`); ``top``, each block's :func:`spectral_top` when
+    the caller holds it already (the same check, without forming it again)."""
     L = sp.csr_matrix(L, dtype=float)
     d = L.diagonal() / mass
     if offsets is not None:
@@ -91,7 +92,8 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
             alpha = 1.0625 * np.maximum.reduceat(d, offsets[:-1])
         elif nonnegative and not np.all(np.asarray(alpha) >= 1.0625 * np.maximum.reduceat(d, offsets[:-1])):
             raise ValueError("alpha must be at least 17/16 of each block's largest L_jj / mass_j")
-        elif not nonnegative and not np.all(np.asarray(alpha) >= 0.5 * spectral_top(L, mass, offsets)):
+        elif not nonnegative and not np.all(np.asarray(alpha) >= 0.5 * (spectral_top(L, mass, offsets)
+                                                                    if top is None else np.asarray(top))):
             raise ValueError("alpha must be at least half of each block's spectral_top")
         alpha = np.asarray(alpha, dtype=float)
         scale = np.repeat(np.where(alpha > 0, alpha, 1.0), np.diff(offsets))
@@ -100,13 +102,33 @@ def rate_matrix(L, mass, offsets=None, alpha=None, nonnegative=True):
         if not top > 0:
             return 0.0, None
         alpha = scale = 1.0625 * top
-    P = sp.csr_matrix(sp.diags(-1.0 / (mass * scale)) @ L)
+    P = _row_scaled(L, -1.0 / (mass * scale))
     P.setdiag(1.0 - d / scale)
     P.eliminate_zeros()
     return alpha, P
 
 
-def spectral_top(L, mass, offsets=None) -> np.ndarray:
+def _row_scaled(L, a):
+    """``diags(a) @ L`` of a csr L with no two entries at one place, as scipy's product forms
+    it (each row's entries in the reverse of L's order, exact zeros left out, every entry
+    a_i L_ij rounded once): the same arrays, so the same series' sums, without the general
+    sparse product's pass."""
+    n = L.shape[0]
+    counts = np.diff(L.indptr)
+    rows = np.repeat(np.arange(n), counts)
+    rev = (L.indptr[:-1] + L.indptr[1:] - 1).astype(np.int64)[rows] - np.arange(L.nnz)
+    data = L.data[rev] * a[rows]
+    keep = data != 0
+    if keep.all():
+        indices, indptr = L.indices[rev], L.indptr.copy()
+    else:
+        data, indices = data[keep], L.indices[rev[keep]]
+        indptr = np.zeros(n + 1, dtype=L.indptr.dtype)
+        np.cumsum(np.bincount(rows[keep], minlength=n), out=indptr[1:])
+    return sp.csr_matrix((data, indices, indptr), shape=L.shape)
+
+
+def spectral_top(L, mass, offsets=None, sums=None) -> np.ndarray:
     r"""Per block of the block-diagonal, symmetric L (``offsets`` as in :func:`rate_matrix`; one
     block when omitted): a proved upper bound of the spectral radius of
     :math:`B^{-1}|L|` (B = diag(``mass``)), so of the largest eigenvalue of :math:`B^{-1}L`.
@@ -116,9 +138,10 @@ def spectral_top(L, mass, offsets=None) -> np.ndarray:
     similar, symmetric :math:`B^{-1/2}|L|B^{-1/2}`), which is well below the first (and
     below twice the largest :math:`L_{ii}/B_{ii}`) where the masses vary. Each term is
     formed with at most 4 roundings and each row summed over at most r terms, so the computed
-    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs.
+    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs. ``sums``: :func:`_row_sums` of
+    the same arguments, when the caller holds them (:func:`abs_radius` reads the same).
     """
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
     start = offsets[:-1]
     top = np.minimum(np.maximum.reduceat(d + off_row, start), np.maximum.reduceat(d + off_sym, start))
     return top * grow
@@ -139,7 +162,7 @@ def _row_sums(L, mass, offsets):
     return offsets, d, off_row, off_sym, (1.0 + _gamma(r + 8)) * (1.0 + 4.0 * U)
 
 
-def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
+def abs_radius(L, mass, offsets, alpha, sums=None) -> np.ndarray:
     r"""Per block (as in :func:`spectral_top`): a proved upper bound of
     :math:`\|\,|P|\,\|_B = \rho(|P|)` for :math:`P = I - B^{-1}L/\alpha_b` (``alpha`` one rate
     per block, at least half its :func:`spectral_top`): :math:`|P|` is self-adjoint in the B
@@ -148,8 +171,8 @@ def abs_radius(L, mass, offsets, alpha) -> np.ndarray:
     neighbours' masses are alike (:func:`chebyshev_blocks`' rounding grows with it).
 
     With :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, :math:`|1 - x_j|` is formed within
-    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top`."""
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets)
+    :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top` (``sums`` too)."""
+    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
     alpha = np.repeat(np.asarray(alpha, dtype=float), np.diff(offsets))
     x = d / alpha
     diag = np.abs(1.0 - x) + 4.0 * U * (1.0 + x)
@@ -177,16 +200,31 @@ def _terms_many(lams, tail):
     K = np.maximum(np.ceil(lams), 1.0)
     out_k, out_tau = np.zeros(lams.size, dtype=np.int64), np.zeros(lams.size)
     todo = np.arange(lams.size)
+    # K runs through k, k + max(1, floor(k / 256)), ...: the next _TERMS_AHEAD of them are
+    # tried at once (the first that meets the tail is the one a try at a time finds)
     while todo.size:
-        lam, k = lams[todo], K[todo]
-        lp = -lam + (k + 1) * np.log(lam) - gammaln(k + 2)
-        lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(np.log(lam)))
-        ok = lt <= log_tail[todo]
-        out_k[todo[ok]] = k[ok]
-        out_tau[todo[ok]] = np.exp(lt[ok])
-        K[todo] = k + np.maximum(1.0, np.floor(k / 256))
-        todo = todo[~ok]
+        k = np.empty((todo.size, _TERMS_AHEAD))
+        k[:, 0] = K[todo]
+        for i in range(1, _TERMS_AHEAD):
+            k[:, i] = k[:, i - 1] + np.maximum(1.0, np.floor(k[:, i - 1] / 256))
+        lam = lams[todo]
+        log_lam = np.log(lam)[:, None]
+        lam = lam[:, None]
+        lp = -lam + (k + 1) * log_lam - gammaln(k + 2)
+        lt = lp - np.log1p(-lam / (k + 2)) + 1e-12 * (lam + k + 2) * (1.0 + np.abs(log_lam))
+        ok = lt <= log_tail[todo][:, None]
+        hit = ok.any(axis=1)
+        first = np.argmax(ok, axis=1)[hit]
+        out_k[todo[hit]] = k[hit, first]
+        out_tau[todo[hit]] = np.exp(lt[hit, first])
+        last = k[:, -1]
+        K[todo] = last + np.maximum(1.0, np.floor(last / 256))
+        todo = todo[~hit]
     return out_k, out_tau
+
+
+#: candidate numbers of terms :func:`_terms_many` tries at once
+_TERMS_AHEAD = 32
 
 
 def terms(t: float, alpha: float, tail: float = TAIL) -> int:
@@ -289,23 +327,23 @@ def uniformize(P, alpha: float, t: float, G: np.ndarray, tail: float = TAIL):
     return (V[:, 0], err[:, 0]) if one else (V, err)
 
 
-def _leading(P, offsets, need):
-    """head(k) -> (rows, the leading rows x rows of P): the blocks still summing at term k, a
+def _leading(P, offsets, need, K, first):
+    """(rows of terms first..K, head): the rows of the blocks still summing at each term, a
     leading part of the block-diagonal P when the blocks come in decreasing order of their
-    terms ``need`` (its columns are those rows too); all of P otherwise."""
+    terms ``need`` (its columns are those rows too), all of P otherwise; head(rows) is the
+    leading rows x rows of P, formed only when asked (the compiled series reads rows alone)."""
     leading = bool(np.all(np.diff(need) <= 0))
     n = P.shape[0]
+    rows = [int(offsets[np.count_nonzero(need >= k)]) if leading else n for k in range(first, K + 1)]
     heads = {}
 
-    def head(k):
-        rows = int(offsets[np.count_nonzero(need >= k)]) if leading else n
-        if rows not in heads:
-            end = int(P.indptr[rows])
-            heads[rows] = (P if rows == n else
-                           sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:rows + 1]), shape=(rows, rows)))
-        return rows, heads[rows]
+    def head(r):
+        if r not in heads:
+            end = int(P.indptr[r])
+            heads[r] = P if r == n else sp.csr_matrix((P.data[:end], P.indices[:end], P.indptr[:r + 1]), shape=(r, r))
+        return heads[r]
 
-    return head
+    return rows, head
 
 
 def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = TAIL):
@@ -364,21 +402,20 @@ def uniformize_blocks(P, alpha, offsets, t: float, G: np.ndarray, tail: float = 
     lam = np.array(lams)
     single = alpha.size == 1
     lam_rows = float(lam[0]) if single else np.repeat(lam, counts)[:, None]
-    head = _leading(P, offsets, need)
+    heads, head = _leading(P, offsets, need, K, 1)
 
     V = G.copy()
-    heads = [head(k) for k in range(1, K + 1)]
-    work = s * sum(Pk.nnz for _, Pk in heads)
+    work = s * sum(int(P.indptr[rows]) for rows in heads)
     for _ in range(s):
         # term k, c_k P^k V with c_k = e^-lam lam^k / k!, as (lam / k) P (term k - 1): the same
         # roundings as the coefficient and the products formed apart (module notes)
         q = V * (float(math.exp(-lams[0])) if single else
                  np.repeat([math.exp(-x) for x in lams], counts)[:, None])
         W = np.ascontiguousarray(q)
-        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + [rows for rows, _ in heads], W)):
+        if not (K >= 1 and poisson_series(P, offsets, lam, [0] + heads, W)):
             W = q.copy()
-            for k, (rows, Pk) in enumerate(heads, start=1):
-                q = Pk @ q[:rows]
+            for k, rows in enumerate(heads, start=1):
+                q = head(rows) @ q[:rows]
                 q *= lam_rows / k if single else lam_rows[:rows] / k
                 W[:rows] += q
         V = W
@@ -576,7 +613,7 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
     # X = -P / sigma, the factor -2 / sigma (rounded once) taken into P's entries (rounded once)
     scale = np.repeat([-2.0 / (1.0 + math.ldexp(1.0, -p[1])) for p in plans], counts)
     P = sp.csr_matrix((P.data * np.repeat(scale, np.diff(P.indptr)), P.indices, P.indptr), shape=P.shape)
-    head = _leading(P, offsets, degree)
+    heads, head = _leading(P, offsets, degree, K, 2)
 
     t0 = np.array(G, dtype=float)
     W = np.repeat(C[:, 0], counts)[:, None] * t0
@@ -586,11 +623,10 @@ def chebyshev_blocks(P, alpha, offsets, t: float, G: np.ndarray, mass, plans, vo
         t1 *= 0.5
         W += np.repeat(C[:, 1], counts)[:, None] * t1
         work += P.nnz
-    heads = [head(k) for k in range(2, K + 1)]
-    work += sum(Pk.nnz for _, Pk in heads)
-    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + [rows for rows, _ in heads], t1, t0, W)):
-        for k, (rows, Pk) in enumerate(heads, start=2):
-            q = Pk @ t1[:rows]
+    work += sum(int(P.indptr[rows]) for rows in heads)
+    if not (K >= 2 and chebyshev_series(P, offsets, C, [0, 0] + heads, t1, t0, W)):
+        for k, rows in enumerate(heads, start=2):
+            q = head(rows) @ t1[:rows]
             new = t0[:rows]
             np.subtract(q, new, out=new)          # t_k = 2X t_{k-1} - t_{k-2}, in t_{k-2}'s place
             t0, t1 = t1, t0
