@@ -44,8 +44,10 @@ def reciprocal_rounding(lap) -> np.ndarray:
     return (theta / (1.0 - theta) + gamma(1)) * (1.0 + gamma(1))
 
 
-#: largest component (vertices) whose lambda_2 :func:`mixed_heat` certifies on its own
+#: largest component (vertices) whose lambda_2 :func:`mixed_heat` certifies on its own, and
+#: most components it certifies in one call (the others keep the partial fractions)
 COMPONENT_GAP_MAX = 2000
+COMPONENT_GAP_COUNT = 2000
 
 
 def mixed_heat(lap, t: float, eps: float):
@@ -82,9 +84,12 @@ def mixed_heat(lap, t: float, eps: float):
     size = np.bincount(comp, minlength=lap.n_components)
     volume = np.bincount(comp, weights=lap.mass, minlength=lap.n_components)
     gaps = lap.cache.fetch("bound", "component_gaps", dict)
-    for c in np.flatnonzero((size <= COMPONENT_GAP_MAX) & (8.0 * np.pi / volume * t > 0.25 * np.log(1.0 / eps))):
-        if c not in gaps:
-            gaps[c] = np.inf if size[c] == 1 else _component_gap(lap, np.flatnonzero(comp == c))
+    candidates = np.flatnonzero((size <= COMPONENT_GAP_MAX) & (8.0 * np.pi / volume * t > 0.25 * np.log(1.0 / eps)))
+    for c in candidates[size[candidates] == 1]:
+        gaps[c] = np.inf
+    todo = sorted((c for c in candidates[size[candidates] > 1] if c not in gaps), key=lambda c: size[c])
+    for c in todo[:COMPONENT_GAP_COUNT]:      # a factorization each: the smallest components first
+        gaps[c] = _component_gap(lap, np.flatnonzero(comp == c))
     if not gaps:
         return mask, decay
     known = np.zeros(lap.n_components)
