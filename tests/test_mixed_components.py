@@ -12,7 +12,7 @@ import pytest
 from conftest import read_shared_mesh
 
 import spectral_igl as sig
-from spectral_igl.diagonal.selinv import mixed_heat
+from spectral_igl.approx.common import mixed_heat
 
 mpmath = pytest.importorskip("mpmath")
 

@@ -49,7 +49,7 @@ import scipy.sparse as sp
 from ..accuracy import UNIT_ROUNDOFF as U, info as make_info, rounding_gamma as _gamma
 from ..laplacian.units import dimension
 from ..linalg.ldlt import region_keys
-from .uniformization import (_row_sums, abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
+from .uniformization import (row_sums, abs_radius, chebyshev_blocks, chebyshev_rate, chebyshev_terms, poisson_terms, rate_matrix,
                              spectral_top, terms, uniformize, uniformize_blocks)
 
 __all__ = ["region_heat_column", "dirichlet_heat", "dirichlet_heat_blocks", "grow_region", "grow_regions", "patches",
@@ -471,7 +471,7 @@ def _chebyshev_choice(lap, t, stacked, m, region_offsets, tail, allowance):
     # half the proved top of each region's spectrum: the series' interval, so its degree,
     # shrinks with it (spectral_top is well below 2 max L_jj / B_jj where the masses vary);
     # the row sums it reads serve abs_radius too
-    sums = _row_sums(stacked, m, region_offsets)
+    sums = row_sums(stacked, m, region_offsets)
     top = spectral_top(stacked, m, region_offsets, sums=sums)
     rates[try_] = chebyshev_rate(0.5 * top[try_])
     volume = np.add.reduceat(m, region_offsets[:-1]) * (1.0 + _gamma(np.diff(region_offsets) + 2))

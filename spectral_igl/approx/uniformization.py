@@ -138,16 +138,16 @@ def spectral_top(L, mass, offsets=None, sums=None) -> np.ndarray:
     similar, symmetric :math:`B^{-1/2}|L|B^{-1/2}`), which is well below the first (and
     below twice the largest :math:`L_{ii}/B_{ii}`) where the masses vary. Each term is
     formed with at most 4 roundings and each row summed over at most r terms, so the computed
-    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs. ``sums``: :func:`_row_sums` of
+    maxima times :math:`(1 + \gamma_{r+8})(1 + 4u)` are proofs. ``sums``: :func:`row_sums` of
     the same arguments, when the caller holds them (:func:`abs_radius` reads the same).
     """
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
+    offsets, d, off_row, off_sym, grow = row_sums(L, mass, offsets) if sums is None else sums
     start = offsets[:-1]
     top = np.minimum(np.maximum.reduceat(d + off_row, start), np.maximum.reduceat(d + off_sym, start))
     return top * grow
 
 
-def _row_sums(L, mass, offsets):
+def row_sums(L, mass, offsets):
     """(offsets, L_jj / B_jj, sum_k!=j |L_jk| / B_jj, sum_k!=j |L_jk| / sqrt(B_jj B_kk), the factor
     (1 + gamma_{r+8})(1 + 4u) that makes a maximum of sums of these terms a proof)."""
     L = sp.csr_matrix(L, dtype=float)
@@ -172,7 +172,7 @@ def abs_radius(L, mass, offsets, alpha, sums=None) -> np.ndarray:
 
     With :math:`x_j = L_{jj}/(B_{jj}\alpha) \le 2`, :math:`|1 - x_j|` is formed within
     :math:`4u(1 + x_j)`, added to each row; the rest as in :func:`spectral_top` (``sums`` too)."""
-    offsets, d, off_row, off_sym, grow = _row_sums(L, mass, offsets) if sums is None else sums
+    offsets, d, off_row, off_sym, grow = row_sums(L, mass, offsets) if sums is None else sums
     alpha = np.repeat(np.asarray(alpha, dtype=float), np.diff(offsets))
     x = d / alpha
     diag = np.abs(1.0 - x) + 4.0 * U * (1.0 + x)

@@ -56,13 +56,13 @@ from ..accuracy import info as bound_info, weakest
 from .._validate import as_choice, as_delta, as_flag, as_int, as_tol, check_dense_size, check_spectral_function
 from ..approx import LARGE_T, spectral_operator
 from ..approx import METHODS as ENGINE_METHODS
-from ..approx.common import gamma, mass_sum_rounding
+from ..approx.common import gamma, mass_sum_rounding, reciprocal_rounding
 from ..filters import check_filter
 from ..laplacian import as_laplacian, entry_error, lambda_max, lambda_max_kind
 from ..linalg import inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind
 from ..progress import progress_bar
 from .probing import probing_diagonal
-from .selinv import NoSelinv, reciprocal_rounding, selinv_kernel, selinv_supported
+from .selinv import NoSelinv, selinv_kernel, selinv_supported
 from .spectral import eigen_diagonal, low_rank, phi_values
 
 __all__ = ["kernel_diagonal", "check_diagonal_options", "column_entry_error", "METHODS", "EXACT_MAX"]

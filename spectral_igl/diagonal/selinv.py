@@ -6,9 +6,9 @@ import scipy.sparse as sp
 
 EPS = np.finfo(float).eps
 
-from ..approx.common import gamma, mass_sum_rounding
+from ..approx.common import mixed_heat, reciprocal_rounding
 from ..approx.rational import RationalPlan, aaa_fit, certifiable, certify, rounding
-from ..laplacian import lambda_max, lambda_max_kind, make_laplacian
+from ..laplacian import lambda_max, lambda_max_kind
 from ..laplacian.cache import SLOTS
 from ..linalg import (
     MassTraces,
@@ -34,78 +34,7 @@ ROUNDING_C = 64.0
 CIRCLE_NODES = 24
 CIRCLE_RADIUS = 1.0 / 3.0
 
-__all__ = ["SelinvKernel", "NoSelinv", "mixed_heat", "selinv_kernel", "selinv_supported"]
-
-
-def reciprocal_rounding(lap) -> np.ndarray:
-    r"""Per vertex, a bound of :math:`|\mathrm{fl}(1/\hat V_c) - 1/V_c|\,\hat V_c` (the heat's
-    limit 1/V_c at a large t, :math:`V_c = 1_c^\top B 1_c` exactly)."""
-    theta = np.minimum(mass_sum_rounding(lap)[1], 0.5)
-    return (theta / (1.0 - theta) + gamma(1)) * (1.0 + gamma(1))
-
-
-#: largest component (vertices) whose lambda_2 :func:`mixed_heat` certifies on its own, and
-#: most components it certifies in one call (the others keep the partial fractions)
-COMPONENT_GAP_MAX = 2000
-COMPONENT_GAP_COUNT = 2000
-
-
-def mixed_heat(lap, t: float, eps: float):
-    r"""Vertices of the components on which the heat at time ``t`` has mixed to within ``eps``.
-
-    On a component c, :math:`K_t(i, j) = 1/V_c + \sum_{l \ge 2} e^{-t\lambda_l}x_l(i)x_l(j)`,
-    so :math:`|K_t(i, j) - 1/V_c| \le e^{-t\lambda_{2,c}}\sqrt{(B^{-1})_{ii}(B^{-1})_{jj}}`
-    (Cauchy--Schwarz over the B-orthonormal :math:`x_l`). Where
-    :math:`e^{-t\lambda_{2,c}} \le` ``eps``, the projection :math:`1/V_c` is as accurate as
-    the partial fractions are allowed to be, with no solve. The partial fractions themselves
-    are, on such a component, a sum of terms :math:`(\sigma L - zB)^{-1}` whose constant mode
-    sits under a stiffness :math:`\sigma\lambda_{\max}` times larger, and their rounding there
-    outgrows the a-priori allowance (a 7-vertex part of truck.obj at t equal to the mesh's
-    area: 3.3e-7 off 2550.85, 4.2 times the allowance).
-
-    :math:`\lambda_{2,c}` is bounded below by :func:`~spectral_igl.linalg.lambda_min_positive`
-    of the component's own L and B (proved by an inertia count), once per component and
-    cached on ``lap``, for the components of at most :data:`COMPONENT_GAP_MAX` vertices that
-    Weyl's law (:math:`8\pi/V_c`) puts above a quarter of :math:`\log(1/\varepsilon)/t`; a
-    single vertex is its own projection. Lumped mass only (else nothing is replaced).
-
-    Returns
-    -------
-    mask : (n,) bool
-        Vertices on mixed components.
-    decay : (n,) float
-        :math:`e^{-t\mu_c}` on them (:math:`\mu_c \le \lambda_{2,c}` proved), 0 elsewhere.
-    """
-    n = lap.n
-    mask, decay = np.zeros(n, bool), np.zeros(n)
-    if not lap.lumped or not 0.0 < eps < 1.0 or not 0.0 < t < np.inf:
-        return mask, decay
-    comp = lap.components
-    size = np.bincount(comp, minlength=lap.n_components)
-    volume = np.bincount(comp, weights=lap.mass, minlength=lap.n_components)
-    gaps = lap.cache.fetch("bound", "component_gaps", dict)
-    candidates = np.flatnonzero((size <= COMPONENT_GAP_MAX) & (8.0 * np.pi / volume * t > 0.25 * np.log(1.0 / eps)))
-    for c in candidates[size[candidates] == 1]:
-        gaps[c] = np.inf
-    todo = sorted((c for c in candidates[size[candidates] > 1] if c not in gaps), key=lambda c: size[c])
-    for c in todo[:COMPONENT_GAP_COUNT]:      # a factorization each: the smallest components first
-        gaps[c] = _component_gap(lap, np.flatnonzero(comp == c))
-    if not gaps:
-        return mask, decay
-    known = np.zeros(lap.n_components)
-    known[list(gaps)] = list(gaps.values())
-    decay = np.exp(-t * known[comp])
-    mask = decay <= eps
-    return mask, np.where(mask, decay, 0.0)
-
-
-def _component_gap(lap, idx) -> float:
-    """A proved lower bound of lambda_2 of the component on the vertices ``idx``, or 0."""
-    part = make_laplacian(lap.L[idx][:, idx], lap.B[idx][:, idx])
-    if part.n_components != 1:
-        return 0.0
-    lo = lambda_min_positive(part)
-    return float(lo) if lambda_min_positive_kind(part) == "proof" else 0.0
+__all__ = ["SelinvKernel", "NoSelinv", "selinv_kernel", "selinv_supported"]
 
 
 class NoSelinv(Exception):

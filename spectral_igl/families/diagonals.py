@@ -18,7 +18,7 @@ import logging
 import numpy as np
 
 from ..approx.rational import certifiable
-from ..diagonal.selinv import mixed_heat, reciprocal_rounding
+from ..approx.common import mixed_heat, reciprocal_rounding
 from ..laplacian import as_laplacian, lambda_max, lambda_max_kind
 from ..linalg import MassTraces, inverse_mass_diagonal, lambda_min_positive, lambda_min_positive_kind, ldlt
 from .fits import as_times, coefficients, family_poles, heat_plan, plan_poles, pole_factorizations
