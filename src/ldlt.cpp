@@ -946,6 +946,20 @@ ISA_BODY series_v4 series_load(const double *x) {
 
 ISA_BODY void series_store(double *x, const series_v4 &v) { __builtin_memcpy(x, &v, sizeof v); }
 
+// q = row i of P times the block x (WC columns), in the vectors of 4 doubles: the same sums in
+// the same order as the scalar loops (no fused multiply-add)
+template <int WC, class I>
+ISA_BODY void series_row(const I *ip, const I *ix, const double *px, int64_t i, const double *x,
+                         series_v4 *q) {
+    for (int v = 0; v < WC / 4; ++v) q[v] = series_v4{0.0, 0.0, 0.0, 0.0};
+    for (I p = ip[i]; p < ip[i + 1]; ++p) {
+        const double a = px[p];
+        const series_v4 av = {a, a, a, a};
+        const double *xr = x + int64_t(ix[p]) * WC;
+        for (int v = 0; v < WC / 4; ++v) q[v] += av * series_load(xr + 4 * v);
+    }
+}
+
 template <int WC, class I>
 ISA_BODY void chebyshev_block_vec(int64_t b, int K, const I *ip, const I *ix, const double *px, const int64_t *off,
                                   const double *C, const int64_t *rows, double *t1, double *t0, double *W) {
@@ -956,13 +970,7 @@ ISA_BODY void chebyshev_block_vec(int64_t b, int K, const I *ip, const I *ix, co
         const series_v4 cv = {ck, ck, ck, ck};
         for (int64_t i = lo; i < hi; ++i) {
             series_v4 q[NV];
-            for (int v = 0; v < NV; ++v) q[v] = series_v4{0.0, 0.0, 0.0, 0.0};
-            for (I p = ip[i]; p < ip[i + 1]; ++p) {
-                const double a = px[p];
-                const series_v4 av = {a, a, a, a};
-                const double *x = t1 + int64_t(ix[p]) * WC;
-                for (int v = 0; v < NV; ++v) q[v] += av * series_load(x + 4 * v);
-            }
+            series_row<WC>(ip, ix, px, i, t1, q);
             double *y = t0 + i * WC, *acc = W + i * WC;
             for (int v = 0; v < NV; ++v) {
                 const series_v4 t = q[v] - series_load(y + 4 * v);
@@ -986,13 +994,7 @@ ISA_BODY void poisson_block_vec(int64_t b, int K, const I *ip, const I *ix, cons
         const series_v4 cv = {ck, ck, ck, ck};
         for (int64_t i = lo; i < hi; ++i) {
             series_v4 y[NV];
-            for (int v = 0; v < NV; ++v) y[v] = series_v4{0.0, 0.0, 0.0, 0.0};
-            for (I p = ip[i]; p < ip[i + 1]; ++p) {
-                const double a = px[p];
-                const series_v4 av = {a, a, a, a};
-                const double *x = q + int64_t(ix[p]) * WC;
-                for (int v = 0; v < NV; ++v) y[v] += av * series_load(x + 4 * v);
-            }
+            series_row<WC>(ip, ix, px, i, q, y);
             double *out = s + i * WC, *acc = W + i * WC;
             for (int v = 0; v < NV; ++v) {
                 const series_v4 t = y[v] * cv;
