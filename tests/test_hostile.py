@@ -290,8 +290,10 @@ def test_filter_of_the_wrong_shape_is_refused_not_broadcast():
     (lambda: sig.eigs(LUMPED, 1, backend=None), "backend must be one of .* got NoneType None"),
     (lambda: sig.schrodinger(LAP, np.ones(N), 0.0, method=""), "method must be one of"),
     (lambda: sig.schrodinger(LAP, np.ones(N), 0.0, tol=np.nan), "tol must be finite"),
-    (lambda: sig.point_cloud_laplacian(V, method="belkin", boundary=None), "boundary must be True or False"),
+    (lambda: sig.point_cloud_laplacian(V, boundary="yes"), "boundary must be True, False or 'auto', got str 'yes'"),
+    (lambda: sig.point_cloud_laplacian(V, boundary=1), "boundary must be True, False or 'auto', got int 1"),
     (lambda: sig.point_cloud_laplacian(V, method="belkin", boundary=True), "boundary=True is an option of"),
+    (lambda: sig.point_cloud_laplacian(V, method="liu", boundary="auto"), "boundary='auto' is an option of"),
     (lambda: sig.heat_kernels(LAP, np.linspace(0.01, 1.0, 1001), [0]), "times has 1001 values, more than 1000"),
 ])
 def test_options_checked_whatever_the_path(call, match):

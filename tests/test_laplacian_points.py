@@ -157,12 +157,14 @@ def test_delaunay_weights_on_a_planar_grid_are_the_grid_cotan_weights():
     assert np.allclose(np.sort(off, axis=1)[:, 4:], 0.0, atol=1e-4)
 
 
-def test_delaunay_neumann_rectangle_spectrum():
+@pytest.mark.parametrize("boundary", [True, "auto"])
+def test_delaunay_neumann_rectangle_spectrum(boundary):
     # random points on the flat rectangle [0, 2] x [0, 1]: free (Neumann) boundary,
-    # eigenvalues π²(i²/4 + j²)
+    # eigenvalues π²(i²/4 + j²); the default ("auto") finds the rim itself (with False,
+    # the rim's cells clipped as one-sided points of a closed surface, the error is 8%)
     rng = np.random.default_rng(5)
     P = np.c_[rng.random((6000, 2)) * [2.0, 1.0], np.zeros(6000)]
-    lap = sig.point_cloud_laplacian(P, boundary=True)
+    lap = sig.point_cloud_laplacian(P, boundary=boundary)
     assert lap.area() == pytest.approx(2.0, rel=0.02)
     ev, _ = sig.eigs(lap, 9)
     i, j = np.meshgrid(np.arange(6), np.arange(4), indexing="ij")
@@ -365,12 +367,54 @@ def test_flat_disk_with_boundary_is_its_delaunay_meshs_cotan_laplacian():
     scale = abs(mesh.L).max()
     assert abs(cloud.L - mesh.L).max() <= 1e-13 * scale
     assert np.allclose(cloud.B.diagonal(), mesh.B.diagonal(), rtol=1e-12, atol=0)
-    # the default takes the rim's open cells for one-sided points of a closed surface: the
-    # square clipping gives those 160 points more area than the disk has there
-    closed = sig.point_cloud_laplacian(V)
-    grown = closed.B.diagonal() / mesh.B.diagonal() - 1
+    # the default finds those 160 rim points and no other, and gives the same operator
     rim = np.zeros(len(V), bool)
     E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
     edges, count = np.unique(E, axis=0, return_counts=True)
     rim[edges[count == 1].ravel()] = True
-    assert rim.sum() == 160 and np.all(grown[rim] > 0.1) and np.abs(grown[~rim]).max() < 1e-12
+    auto = sig.point_cloud_laplacian(V)
+    assert rim.sum() == 160 and np.array_equal(auto.data["rim"], rim)
+    assert abs(auto.L - mesh.L).max() <= 1e-13 * scale
+    assert np.allclose(auto.B.diagonal(), mesh.B.diagonal(), rtol=1e-12, atol=0)
+    # boundary=False takes the rim's open cells for one-sided points of a closed surface:
+    # the square clipping gives those 160 points more area than the disk has there
+    closed = sig.point_cloud_laplacian(V, boundary=False)
+    grown = closed.B.diagonal() / mesh.B.diagonal() - 1
+    assert np.all(grown[rim] > 0.1) and np.abs(grown[~rim]).max() < 1e-12
+
+
+def test_folds_of_closed_surfaces_are_not_rims():
+    """cow.obj is closed. 72 of its vertices have cells that 20 neighbours leave open (thin
+    ears, hooves, horns), and 43 stay open among 60; but at each a fold lays two sheets over
+    the tangent plane (40-95% of the neighbours project closer to another neighbour than half
+    their distance), which a rim never does. The default reads none of them as a rim, and its
+    operator is boundary=False's bit for bit; with boundary=True they lose their clipped area."""
+    from spectral_igl.laplacian import points
+
+    V, F = read_shared_mesh("cow.obj")
+    V = V[np.unique(F)]
+    auto = sig.point_cloud_laplacian(V)
+    closed = sig.point_cloud_laplacian(V, boundary=False)
+    cut = sig.point_cloud_laplacian(V, boundary=True)
+    assert not auto.data["rim"].any()
+    assert (auto.L != closed.L).nnz == 0 and np.array_equal(auto.B.diagonal(), closed.B.diagonal())
+    assert cut.data["rim"].sum() >= 60 and cut.area() < closed.area()
+    # the test itself: a flat half-disk's star is a graph over its plane, the same star
+    # folded onto a parallel sheet at a tenth of its radius above it is not
+    rng = np.random.default_rng(0)
+    q = rng.random((1, 20, 2)) * [1.0, 2.0] - [0.0, 1.0]
+    flat = np.c_[q[0], np.zeros(20)][None]
+    folded = flat.copy()
+    folded[0, 10:, 2] = 0.1
+    folded[0, 10:, :2] = folded[0, :10, :2] + 0.02
+    assert points._overlap(flat, q)[0] == 0.0
+    assert points._overlap(folded, folded[..., :2])[0] >= 0.9
+
+
+def test_no_point_of_a_closed_sampling_is_a_rim():
+    """On the unit sphere (uniformly random and 3x non-uniform, 4,000 points) cells that 20
+    neighbours leave open are closed by 60: the default is boundary=False's operator."""
+    for P in (sphere_points(4000, seed=3), sphere_points(4000, seed=4, nonuniform=1.0)):
+        lap = sig.point_cloud_laplacian(P)
+        assert not lap.data["rim"].any()
+        assert (lap.L != sig.point_cloud_laplacian(P, boundary=False).L).nnz == 0

@@ -165,7 +165,7 @@ def _point_parts(lap: Laplacian, cover: bool, mollify: float):
     share of the cloud's own, so that a point in no triangle stays attached."""
     P, n = lap.data["P"], lap.n
     k = lap.data.get("k") if lap.data.get("method") == "delaunay" else 20
-    boundary = bool(lap.data.get("boundary", False))
+    boundary = lap.data.get("boundary") is True  # "auto" stars keep their clipped cells here
     if not cover:
         T = local_triangles(P, k=k, boundary=boundary)
         l = edge_lengths(P, T)

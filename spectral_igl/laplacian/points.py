@@ -217,7 +217,7 @@ def _check_size(n: int, k: int) -> None:
 
 def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=None,
                           radius: float | None = None, bandwidth: float | None = None,
-                          boundary: bool = False) -> Laplacian:
+                          boundary: bool | str | None = None) -> Laplacian:
     r"""Laplacian of a point cloud sampled from a surface.
 
     * ``"delaunay"`` (default): cotangent weights of the local Delaunay triangulation in
@@ -291,30 +291,44 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     bandwidth : float or None
         Heat methods only: the factor in the adaptive bandwidth above. ``None``: 0.9 for
         ``"belkin"``, 1.1 for ``"liu"``.
-    boundary : bool
-        ``"delaunay"`` only: the points sample a surface *with boundary* (free, Neumann).
-        A cell that its ``k`` neighbours leave open is taken to be on the boundary: it
-        is the circumcentric dual of the local Delaunay star, whose hull edges keep
-        :math:`\tfrac12\cot` of their one angle (the bisector cut at the edge's
-        midpoint). ``False`` (default, closed surfaces): an open cell, which there means
-        a point short of neighbours on one side (sharp tips, anisotropic sampling), is
-        clipped by a square of half-side 1.5 times the distance to its 8th neighbour.
-        Measured on random points of a flat 2 x 1 rectangle, first 8 Neumann
-        eigenvalues, largest relative error at 4,000 -> 16,000 points: 0.95% -> 0.61% with
-        ``True``, 8.6% -> 4.2% with ``False``. On the vertices of the 11 real shapes of
-        ``benchmarks/point_clouds.py`` (median error of 20 eigenvalues against each
-        surface's spectrum), ``True`` is better where the mesh has holes or seams
-        (stanford-bunny 1.75% -> 0.76%, beetle 6.1% -> 5.9%; on circle, a flat disk,
-        5.25% -> 0.169%, its mesh's own cotan Laplacian) and worse on one-sided closed
-        samplings (cow 6.0% -> 7.5%, rocker-arm 2.8% -> 3.6%). No per-point test found
-        tells a rim from those (``docs/results.md``), so the choice is the caller's.
+    boundary : {"auto", True, False} or None
+        ``"delaunay"`` only: how a cell that its ``k`` neighbours leave open is read.
+
+        * a **rim** (a surface *with boundary*, free/Neumann): the cell is the circumcentric
+          dual of the local Delaunay star, whose hull edges keep :math:`\tfrac12\cot` of
+          their one angle (the bisector cut at the edge's midpoint);
+        * a **one-sided point of a closed surface** (sharp tips, folds, anisotropic
+          sampling): the cell is clipped by a square of half-side 1.5 times the distance to
+          its 8th neighbour.
+
+        ``"auto"`` (``None``, the default): a rim where the cell is still open among
+        ``RIM_FACTOR`` (3) times as many neighbours and the star is a graph over its plane
+        (at most ``RIM_OVERLAP``, 25%, of its neighbours have another neighbour that projects
+        closer than half their 3-D distance: where a fold lays two sheets over each other);
+        otherwise one-sided. ``True``: every open cell is a rim. ``False``: none is. The
+        points taken for rims are ``data["rim"]``.
+
+        Measured (``benchmarks/point_clouds.py``, median / largest relative error of the
+        first 20 nonzero eigenvalues against each surface's spectrum): on circle.obj, a flat
+        disk, ``"auto"`` finds the 160 rim points and no other, and the operator is the mesh's
+        own cotan Laplacian and Voronoi mass (0.169% / 0.367%; ``False`` 5.25% / 9.17%);
+        stanford-bunny, whose scan has holes, 1.75% -> 1.26% (``True`` 0.76%); beetle 6.13%
+        -> 5.66%; on the closed shapes it takes cow's folds (ears, hooves, horns: 40-95%
+        overlapping neighbours) for one-sided and leaves spot, fertility, fandisk,
+        armadillo, cow, homer and suzanne bit for bit as with ``False`` (rocker-arm 2.82% ->
+        2.88%, 7 rims; cheburashka 1.91% -> 1.90%, 1 rim); no point of the four sphere
+        samplings is a rim. Random points of a flat 2 x 1 rectangle, largest error of the
+        first 8 Neumann eigenvalues, median of 5 samplings at 4,000 -> 16,000 points:
+        ``"auto"`` 1.59% -> 0.44%, ``True`` 1.94% -> 0.37%, ``False`` 8.08% -> 4.19%
+        (robust_laplacian 4.11% -> 4.56%).
 
     Returns
     -------
     Laplacian
         ``domain="points"``; ``B`` diagonal and positive, ``L`` symmetric PSD with zero row
         sums and non-positive off-diagonal entries; ``data`` holds ``P``, ``method``,
-        ``k`` (and ``t``, the per-point bandwidths, for the heat methods).
+        ``k`` (and ``t``, the per-point bandwidths, for the heat methods; ``boundary`` and
+        ``rim``, the boolean mask of the points read as rims, for ``"delaunay"``).
 
     Notes
     -----
@@ -333,7 +347,8 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     truck, suzanne, beetle: the same points sample the surface without the cut), parts
     that touch (homer's largest error 90% -> 4.1% and cheburashka's 36% -> 8.2% with each
     star kept to its own sheet, an oracle; cow's tail, 92% -> 74%, robust_laplacian 52%),
-    and circle, a flat disk, which needs ``boundary=True``. Coincident points are allowed
+    and circle, a flat disk, where the operator is its mesh's own (cotan, Voronoi mass:
+    0.169% against 0.155%; with full mass that mesh gives 0.144%). Coincident points are allowed
     (neighbours at distance 0; ``"delaunay"`` gives a coincident pair no weight between
     them). Points whose neighbourhoods do not connect form separate components.
 
@@ -351,10 +366,15 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     k_default, bw_default = _DEFAULTS[method]
-    if not isinstance(boundary, (bool, np.bool_)):
-        raise TypeError(f"boundary must be True or False, got {describe(boundary)}")
-    if boundary and method != "delaunay":
-        raise ValueError(f"boundary=True is an option of method='delaunay', not of method={method!r}")
+    if boundary is None:
+        boundary = "auto" if method == "delaunay" else False
+    if isinstance(boundary, (bool, np.bool_)):
+        boundary = bool(boundary)
+    elif not (isinstance(boundary, str) and boundary == "auto"):
+        raise TypeError(f"boundary must be True, False or 'auto', got {describe(boundary)}")
+    if boundary is not False and method != "delaunay":
+        raise ValueError(f"boundary={boundary!r} is an option of method='delaunay', not of "
+                         f"method={method!r}")
     if method == "delaunay":
         given = [name for name, v in (("t", t), ("radius", radius), ("bandwidth", bandwidth))
                  if v is not None]
@@ -364,12 +384,12 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         chosen = k is None
         k = _check_k(k, k_default, n)
         _check_size(n, k)
-        lap = _delaunay_laplacian(P, k, bool(boundary))
+        lap = _delaunay_laplacian(P, k, boundary)
         if chosen and k < JOIN_K < n and lap.components.max() > 0 \
                 and lap.components.max() + 1 > neighbour_pieces(P, JOIN_K):
             # the stars leave apart what a wider neighbourhood joins (a band sampled more
             # coarsely than its sides): the default takes the wider stars
-            lap = _delaunay_laplacian(P, JOIN_K, bool(boundary))
+            lap = _delaunay_laplacian(P, JOIN_K, boundary)
         return lap
     bandwidth = as_positive(bw_default if bandwidth is None else bandwidth, "bandwidth")
     if radius is not None:
@@ -536,22 +556,84 @@ def _knn(tree, P, rows, k):
     return d[keep].reshape(m, k), J[keep].reshape(m, k)
 
 
-def _delaunay_laplacian(P: np.ndarray, k, boundary: bool = False) -> Laplacian:
+def _delaunay_laplacian(P: np.ndarray, k, boundary=False) -> Laplacian:
     from scipy.spatial import cKDTree
 
-    d, J = _knn(cKDTree(P), P, np.arange(P.shape[0]), k)
+    tree = cKDTree(P)
+    d, J = _knn(tree, P, np.arange(P.shape[0]), k)
     if not np.any(d > 0):
         raise ValueError("all points coincide: there is no tangent plane")
-    return delaunay_from_neighbours(P, d, J, boundary)
+    return delaunay_from_neighbours(P, d, J, boundary, tree=tree)
 
 
-def delaunay_from_neighbours(P: np.ndarray, d: np.ndarray, J: np.ndarray, boundary: bool = False) -> Laplacian:
+#: ``boundary="auto"`` takes a cell for a rim where it is still open among this many times
+#: its star's ``k`` neighbours (a one-sided point of a closed surface is closed by points
+#: a little farther away; nothing closes a rim's cell) ...
+RIM_FACTOR = 3
+#: ... and its star is a graph over the tangent plane: at most this share of its neighbours
+#: has another neighbour that projects closer than half their 3-D distance. A fold (the rim
+#: of a thin ear, a hoof's edge, a horn's tip, seen from points too sparse for it) lays two
+#: sheets over each other there: cow's 43 cells that stay open all have 40-95% such
+#: neighbours, circle's and stanford-bunny's rims none
+RIM_OVERLAP = 0.25
+
+
+def _overlap(nb: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """(r,): the share of each star's neighbours (offsets ``nb`` (r, k, 3), plane coordinates
+    ``Q`` (r, k, 2)) that have another neighbour closer than half their 3-D distance in the
+    plane: where the projection folds the surface over itself."""
+    k = nb.shape[1]
+    D3 = np.linalg.norm(nb[:, :, None] - nb[:, None], axis=3)
+    D2 = np.linalg.norm(Q[:, :, None] - Q[:, None], axis=3)
+    steep = D2 < 0.5 * D3
+    steep[:, np.arange(k), np.arange(k)] = False
+    return steep.any(axis=2).mean(axis=1)
+
+
+def _rims(P: np.ndarray, tree, d: np.ndarray, J: np.ndarray, is_open: np.ndarray,
+          block: int = 4096) -> np.ndarray:
+    """Boolean (n,): the points whose tangent cell among their ``k`` neighbours ``J`` is open,
+    stays open among their ``RIM_FACTOR * k`` nearest (clipped by the same square), and
+    whose ``k``-star is a graph over its plane (:data:`RIM_OVERLAP`); ``block`` open points
+    at a time (a cloud whose cells are all open stays within a few times the stars' memory)."""
+    k = J.shape[1]
+    rim = np.zeros(len(P), bool)
+    kk = min(RIM_FACTOR * k, len(P) - 1)
+    if kk <= k:
+        return rim
+    open_rows = np.flatnonzero(is_open)
+    for start in range(0, open_rows.size, block):
+        rows = open_rows[start:start + block]
+        nb, Q, _, _, _ = _star_plane(P, rows, d[rows], J[rows], False)
+        rows = rows[_overlap(nb, Q) <= RIM_OVERLAP]
+        if rows.size:
+            d2, J2 = _knn(tree, P, rows, kk)
+            d2[:, :k] = d[rows]   # the same clipping square (1.5 times the 8th distance)
+            rim[rows] = _star_plane(P, rows, d2, J2, False)[4]
+    return rim
+
+
+def delaunay_from_neighbours(P: np.ndarray, d: np.ndarray, J: np.ndarray, boundary=False,
+                             tree=None) -> Laplacian:
     """``"delaunay"``'s operator with each point's star among the given neighbours: ``J``
     (n, k) their indices, ``d`` (n, k) their distances, nearest first (what a benchmark's
-    oracle that knows the surface passes in place of the k nearest)."""
+    oracle that knows the surface passes in place of the k nearest). ``boundary``: True,
+    False or ``"auto"`` (:func:`point_cloud_laplacian`); ``tree``: a KD-tree of ``P``, for
+    ``"auto"``."""
     n, k = J.shape
     rows = np.arange(n)
-    area, w, is_open = _star(P, rows, d, J, boundary)
+    if boundary == "auto":
+        area, w, is_open = _star(P, rows, d, J, False)
+        if tree is None:
+            from scipy.spatial import cKDTree
+
+            tree = cKDTree(P)
+        rim = _rims(P, tree, d, J, is_open)
+        if rim.any():
+            area[rim], w[rim], _ = _star(P, rows[rim], d[rim], J[rim], True)
+    else:
+        area, w, is_open = _star(P, rows, d, J, bool(boundary))
+        rim = is_open if boundary else np.zeros(n, bool)
     r = np.repeat(rows, k)
     nz = w.ravel() > 0
     W = sp.csr_matrix((w.ravel()[nz], (r[nz], J.ravel()[nz])), shape=(n, n))
@@ -566,7 +648,8 @@ def delaunay_from_neighbours(P: np.ndarray, d: np.ndarray, J: np.ndarray, bounda
     if not good.all():
         area = np.where(good, area, float(np.mean(area[good])) if good.any() else 1.0)
     mass = np.where(np.isfinite(mass) & (mass > 0), mass, area)   # a point without a neighbour
-    data = {"P": P, "method": "delaunay", "k": k, "radius": None, "boundary": boundary}
+    data = {"P": P, "method": "delaunay", "k": k, "radius": None, "boundary": boundary,
+            "rim": rim}
     return make_laplacian(-W, sp.diags(mass).tocsr(), domain="points", data=data)
 
 
