@@ -318,9 +318,9 @@ def point_cloud_laplacian(P, k: int | None = None, method: str = "delaunay", t=N
         armadillo, cow, homer and suzanne bit for bit as with ``False`` (rocker-arm 2.82% ->
         2.88%, 7 rims; cheburashka 1.91% -> 1.90%, 1 rim); no point of the four sphere
         samplings is a rim. Random points of a flat 2 x 1 rectangle, largest error of the
-        first 8 Neumann eigenvalues, median of 5 samplings at 4,000 -> 16,000 points:
-        ``"auto"`` 1.59% -> 0.44%, ``True`` 1.94% -> 0.37%, ``False`` 8.08% -> 4.19%
-        (robust_laplacian 4.11% -> 4.56%).
+        first 8 Neumann eigenvalues at 4,000 -> 16,000 points (``benchmarks/domains.py``):
+        ``"auto"`` 1.09% -> 0.41%, ``True`` 0.95% -> 0.61%, ``False`` 8.57% -> 4.20%
+        (robust_laplacian 4.00% -> 4.72%).
 
     Returns
     -------
