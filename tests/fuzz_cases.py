@@ -80,7 +80,7 @@ FUNCTIONS = {
     "anisotropic_laplacian": [("V", "V", {"V": "ok"}), ("F", "F", {"F": "ok"}), ("alpha", "pos", 10.0),
                               ("mass", "choice", "full")],
     "point_cloud_laplacian": [("P", "cloud", {"V": "ok"}), ("k", "int", 12), ("method", "choice", "belkin"),
-                              ("boundary", "bool", False)],
+                              ("boundary", "choice", None)],
     "voxel_laplacian": [("mask", "mask", {"mask": "ok"}), ("spacing", "pos", 1.0)],
     "graph_laplacian": [("n", "int", 4), ("edges", "F", {"edges": "ok"}), ("weights", "signal", None)],
     "make_laplacian": [("L", "matrix", {"matrix": "L"}), ("B", "matrix", {"matrix": "B"})],
