@@ -574,7 +574,8 @@ RIM_FACTOR = 3
 #: has another neighbour that projects closer than half their 3-D distance. A fold (the rim
 #: of a thin ear, a hoof's edge, a horn's tip, seen from points too sparse for it) lays two
 #: sheets over each other there: cow's 43 cells that stay open all have 40-95% such
-#: neighbours, circle's and stanford-bunny's rims none
+#: neighbours, circle's 160 rims none, 41 of the 42 stanford-bunny cells that stay open
+#: less than 25% (one has 45%)
 RIM_OVERLAP = 0.25
 
 
